@@ -1,0 +1,469 @@
+"""Load, validate and summarise configurations.
+
+Every problem is collected (not just the first) and reported as ``file: key.path: message``,
+with a "did you mean" for near misses, so a student can fix a file in one pass.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import importlib.util
+import sys
+import tomllib
+import traceback
+from functools import cache
+from importlib.resources import files
+from pathlib import Path
+from typing import Any, get_args
+
+import numpy as np
+from pydantic import BaseModel, ValidationError
+
+from simmer.config.models import DEVICE_GROUPS, DeviceSpec, Settings, SimConfig
+from simmer.devices import device_kinds, get_device_kind
+from simmer.errors import ConfigError, ConfigIssue, DeviceKindError
+from simmer.geometry import Pose, place_polygon, polygon_hits_grid, polygons_overlap
+
+DEFAULT_KIND = {"motors": "motor", "drives": "drive"}
+CATEGORY_OF_GROUP = {"motors": "motor", "drives": "drive", "sensors": "sensor"}
+BUILTIN_SOURCE = "<built-in default>"
+
+
+def load_config(path: str | Path | None = None) -> SimConfig:
+    """Load a configuration file (TOML or SimMeR ``config.py``); None gives the built-in default."""
+    if path is None:
+        return default_config()
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(
+            path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
+        )
+    if path.suffix == ".py":
+        from simmer.config.simmer_py import load_simmer_py
+
+        return load_simmer_py(path)
+    return config_from_toml(path.read_text(encoding="utf-8"), str(path), path.parent)
+
+
+@cache
+def default_config() -> SimConfig:
+    """The built-in default: SimMeR's maze, block and start pose with the lab rover, noise off."""
+    text = files("simmer").joinpath("data/default.toml").read_text(encoding="utf-8")
+    return config_from_toml(text, BUILTIN_SOURCE, Path.cwd())
+
+
+def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
+    """Parse TOML text and validate it (see :func:`config_from_dict`)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line = _toml_error_line(str(exc))
+        raise ConfigError(
+            source,
+            [ConfigIssue("", f"not valid TOML: {exc}; check quotes, commas and brackets", line)],
+        ) from None
+    return config_from_dict(data, source, base_dir)
+
+
+def _toml_error_line(message: str) -> int | None:
+    marker = "(at line "
+    if marker in message:
+        tail = message.split(marker, 1)[1]
+        digits = tail.split(",", 1)[0]
+        if digits.isdigit():
+            return int(digits)
+    return None
+
+
+def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimConfig:
+    """Validate a configuration given as plain data; raise :class:`ConfigError` listing every issue."""
+    data = dict(data)
+    issues: list[ConfigIssue] = []
+    groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
+    issues += _load_plugins(data.get("plugins", []), base_dir)
+
+    settings: Settings | None = None
+    try:
+        settings = Settings.model_validate(data)
+    except ValidationError as exc:
+        issues += _issues_from_validation(exc, "", Settings)
+
+    devices = _validate_devices(groups, issues)
+    if settings is not None:
+        issues += _check_walls(settings)
+        issues += _check_references(settings, devices)
+        if not any(issue.key.startswith(("walls", "robot_", "block_")) for issue in issues):
+            issues += _check_placement(settings)
+    if issues:
+        raise ConfigError(source, issues)
+    assert settings is not None
+    return SimConfig(settings, tuple(devices), source)
+
+
+# ----------------------------------------------------------------------------- plugins
+
+
+def _load_plugins(plugins: Any, base_dir: Path) -> list[ConfigIssue]:
+    """Import each plug-in (a .py file relative to the config, or a module name)."""
+    if not isinstance(plugins, list | tuple):
+        return []  # the Settings model reports the wrong type
+    issues = []
+    for i, entry in enumerate(plugins):
+        if not isinstance(entry, str):
+            continue
+        try:
+            _import_plugin(entry, base_dir)
+        except FileNotFoundError:
+            issues.append(
+                ConfigIssue(
+                    f"plugins[{i}]",
+                    f"no file {entry!r} next to the configuration ({base_dir}); "
+                    "give a path relative to the configuration file",
+                )
+            )
+        except Exception as exc:  # noqa: BLE001 - any error in user code becomes an issue
+            issues.append(ConfigIssue(f"plugins[{i}]", _describe_plugin_error(entry, exc)))
+    return issues
+
+
+def _import_plugin(entry: str, base_dir: Path) -> None:
+    if entry.endswith(".py") or "/" in entry or "\\" in entry:
+        path = (base_dir / entry).resolve()
+        if not path.is_file():
+            raise FileNotFoundError(path)
+        name = f"simmer_plugin_{path.stem}_{abs(hash(str(path))):x}"
+        if name in sys.modules:
+            return
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
+            raise
+    else:
+        importlib.import_module(entry)
+
+
+def _describe_plugin_error(entry: str, exc: Exception) -> str:
+    if isinstance(exc, DeviceKindError):
+        return f"{entry}: {exc}"
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = ""
+    for frame in reversed(frames):
+        if Path(frame.filename).name == Path(entry).name:
+            where = f" at line {frame.lineno}"
+            break
+    return f"importing {entry} failed{where}: {type(exc).__name__}: {exc}"
+
+
+# ----------------------------------------------------------------------------- devices
+
+
+def _validate_devices(groups: dict[str, Any], issues: list[ConfigIssue]) -> list[DeviceSpec]:
+    devices: list[DeviceSpec] = []
+    seen: dict[str, str] = {}
+    for group in DEVICE_GROUPS:
+        table = groups[group]
+        if not isinstance(table, dict):
+            issues.append(
+                ConfigIssue(group, f"must be a table of devices like [{group}.xx], not {table!r}")
+            )
+            continue
+        for device_id, raw in table.items():
+            key = f"{group}.{device_id}"
+            if not isinstance(raw, dict):
+                issues.append(ConfigIssue(key, f"must be a table of settings, not {raw!r}"))
+                continue
+            id_problem = _id_problem(device_id)
+            if id_problem:
+                issues.append(ConfigIssue(key, id_problem))
+            if device_id in seen:
+                issues.append(
+                    ConfigIssue(
+                        key,
+                        f"device id {device_id!r} is already used by "
+                        f"[{seen[device_id]}.{device_id}]; every device needs its own id",
+                    )
+                )
+            seen.setdefault(device_id, group)
+            spec = _validate_device(group, device_id, raw, issues)
+            if spec is not None:
+                devices.append(spec)
+    return devices
+
+
+def _id_problem(device_id: str) -> str | None:
+    if len(device_id) != 2 or not device_id.isascii() or not device_id.isprintable():
+        return (
+            f"device id {device_id!r} must be exactly two ASCII characters "
+            "(like 'u0'), because commands are addressed by their first two characters"
+        )
+    if device_id == "xx":
+        return "'xx' is reserved for the emergency stop; choose another id"
+    if "," in device_id or "-" in device_id or " " in device_id:
+        return f"device id {device_id!r} may not contain ',', '-' or spaces"
+    return None
+
+
+def _validate_device(
+    group: str, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue]
+) -> DeviceSpec | None:
+    key = f"{group}.{device_id}"
+    raw = dict(raw)
+    if "id" in raw:
+        issues.append(
+            ConfigIssue(
+                f"{key}.id",
+                f"a device's id is the name of its table ([{key}]); delete the 'id' line",
+            )
+        )
+        raw.pop("id")
+    kind_name = raw.setdefault("type", DEFAULT_KIND.get(group))
+    if kind_name is None:
+        issues.append(
+            ConfigIssue(
+                f"{key}.type",
+                "missing: say what the sensor is, one of " + _kind_list("sensor"),
+            )
+        )
+        return None
+    kind = get_device_kind(str(kind_name))
+    if kind is None:
+        hint = _did_you_mean(str(kind_name), list(device_kinds()))
+        issues.append(
+            ConfigIssue(
+                f"{key}.type",
+                f"unknown device kind {kind_name!r}{hint}; known kinds: "
+                + _kind_list(CATEGORY_OF_GROUP[group]),
+            )
+        )
+        return None
+    if kind.category != CATEGORY_OF_GROUP[group]:
+        issues.append(
+            ConfigIssue(
+                f"{key}.type",
+                f"{kind_name!r} is a {kind.category}, so it belongs in [{kind.category}s.{device_id}]"
+                f", not [{group}.{device_id}]",
+            )
+        )
+        return None
+    try:
+        params = kind.Params.model_validate(raw)
+    except ValidationError as exc:
+        issues += _issues_from_validation(exc, key, kind.Params)
+        return None
+    problems = params.problems()
+    issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in problems]
+    if problems:
+        return None
+    return DeviceSpec(device_id, group, str(kind_name), params)  # type: ignore[arg-type]
+
+
+def _kind_list(category: str) -> str:
+    names = sorted(name for name, cls in device_kinds().items() if cls.category == category)
+    return ", ".join(names)
+
+
+# ----------------------------------------------------------------------------- cross checks
+
+
+def _check_walls(settings: Settings) -> list[ConfigIssue]:
+    walls = settings.walls
+    if not walls or not walls[0]:
+        return [
+            ConfigIssue(
+                "walls", "is empty: give at least one row of cells, e.g. walls = [[1, 1], [1, 1]]"
+            )
+        ]
+    issues = []
+    width = len(walls[0])
+    for r, row in enumerate(walls):
+        if len(row) != width:
+            issues.append(
+                ConfigIssue(
+                    f"walls[{r}]",
+                    f"has {len(row)} cells but row 0 has {width}; every row needs the same number",
+                )
+            )
+    if not any(cell != 0 for row in walls for cell in row):
+        issues.append(ConfigIssue("walls", "has no open cell (0 means solid); use 1 for floor"))
+    return issues
+
+
+def _check_references(settings: Settings, devices: list[DeviceSpec]) -> list[ConfigIssue]:
+    issues = []
+    by_id = {spec.id: spec for spec in devices}
+    motor_ids = [spec.id for spec in devices if spec.group == "motors"]
+    sensor_ids = [spec.id for spec in devices if spec.group == "sensors"]
+    for spec in devices:
+        if spec.group != "drives":
+            continue
+        for i, motor in enumerate(getattr(spec.params, "motors", ())):
+            if motor not in motor_ids:
+                hint = _did_you_mean(motor, motor_ids)
+                known = ", ".join(motor_ids) or "none"
+                issues.append(
+                    ConfigIssue(
+                        f"drives.{spec.id}.motors[{i}]",
+                        f"no motor {motor!r}{hint}; the motors are: {known}",
+                    )
+                )
+    for i, device_id in enumerate(settings.simulate_list):
+        if device_id not in sensor_ids:
+            what = (
+                f"{device_id!r} is a {by_id[device_id].group[:-1]}"
+                if device_id in by_id
+                else (f"no sensor {device_id!r}{_did_you_mean(device_id, sensor_ids)}")
+            )
+            issues.append(
+                ConfigIssue(
+                    f"simulate_list[{i}]",
+                    f"{what}; list only sensor ids ({', '.join(sensor_ids) or 'none'})",
+                )
+            )
+    if settings.port_rx == settings.port_tx:
+        issues.append(ConfigIssue("port_tx", f"must differ from port_rx ({settings.port_rx})"))
+    return issues
+
+
+def _check_placement(settings: Settings) -> list[ConfigIssue]:
+    from simmer.world.maze import Block, Maze, robot_outline
+
+    maze = Maze.from_settings(settings)
+    block = Block.from_settings(settings)
+    outline = robot_outline(settings)
+    pose = Pose(*settings.robot_start_position, settings.robot_start_rotation)
+    robot = np.empty_like(outline)
+    place_polygon(outline, pose.x, pose.y, pose.heading, robot)
+    issues = []
+    if polygon_hits_grid(robot, maze.hwall, maze.vwall, maze.solid, maze.cell):
+        issues.append(
+            ConfigIssue(
+                "robot_start_position",
+                f"the robot at {list(settings.robot_start_position)} overlaps a wall, a solid "
+                f"cell or the maze edge; put it in an open cell, e.g. {maze.open_cell_centre()}",
+            )
+        )
+    if polygon_hits_grid(block.polygon, maze.hwall, maze.vwall, maze.solid, maze.cell):
+        issues.append(
+            ConfigIssue(
+                "block_position",
+                f"the block at {list(settings.block_position)} overlaps a wall, a solid cell or "
+                "the maze edge; put it inside an open cell",
+            )
+        )
+    elif not issues and polygons_overlap(robot, block.polygon):
+        issues.append(
+            ConfigIssue("block_position", "the block overlaps the robot's start position")
+        )
+    return issues
+
+
+# ----------------------------------------------------------------------------- messages
+
+
+def _did_you_mean(name: str, candidates: list[str]) -> str:
+    close = difflib.get_close_matches(name, candidates, n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _key_path(prefix: str, loc: tuple[int | str, ...]) -> str:
+    path = prefix
+    for part in loc:
+        if isinstance(part, int):
+            path += f"[{part}]"
+        else:
+            path = f"{path}.{part}" if path else str(part)
+    return path
+
+
+def _fields_at(model: type[BaseModel], loc: tuple[int | str, ...]) -> list[str]:
+    """Field names of the (nested) model found by following ``loc`` from ``model``."""
+    current: Any = model
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        if not (isinstance(current, type) and issubclass(current, BaseModel)):
+            return []
+        field = current.model_fields.get(part)
+        if field is None:
+            return []
+        current = _model_in(field.annotation)
+    if isinstance(current, type) and issubclass(current, BaseModel):
+        return list(current.model_fields)
+    return []
+
+
+def _model_in(annotation: Any) -> Any:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _issues_from_validation(
+    exc: ValidationError, prefix: str, model: type[BaseModel]
+) -> list[ConfigIssue]:
+    issues = []
+    for error in exc.errors():
+        loc = tuple(error["loc"])
+        kind = error["type"]
+        if kind == "extra_forbidden":
+            name = str(loc[-1])
+            hint = _did_you_mean(name, _fields_at(model, loc[:-1]))
+            message = f"unknown key{hint}; check its spelling or delete it"
+        elif kind == "missing":
+            message = "required key is missing"
+        else:
+            message = f"{error['msg']} (got {_short(error.get('input'))})"
+        issues.append(ConfigIssue(_key_path(prefix, loc), message))
+    return issues
+
+
+# ----------------------------------------------------------------------------- summary
+
+
+def summarize(config: SimConfig) -> str:
+    """One paragraph describing what a configuration sets up (for ``simmer check``)."""
+    s = config.settings
+    rows, cols = len(s.walls), len(s.walls[0])
+    length = s.wall_segment_length
+    groups: dict[str, list[str]] = {group: [] for group in DEVICE_GROUPS}
+    for spec in config.devices:
+        groups[spec.group].append(spec.id if spec.group != "sensors" else f"{spec.id} {spec.kind}")
+    parts = [
+        f"{len(groups[g])} {g[:-1] if len(groups[g]) == 1 else g}"
+        + (f" ({', '.join(groups[g])})" if groups[g] else "")
+        for g in DEVICE_GROUPS
+    ]
+    noise = (
+        "fresh random noise each run"
+        if s.rand_error
+        else (f"repeatable noise (seed {s.seed if s.seed is not None else s.floor_seed})")
+    )
+    bias = (
+        f"drive biases drawn at start (strength {list(s.bias_strength)})"
+        if s.rand_bias
+        else "drive biases as configured"
+    )
+    return (
+        f"Maze of {cols} x {rows} cells of {length:g} in ({cols * length:g} x {rows * length:g} in), "
+        f"floor tiles of {s.floor_segment_length:g} in from seed {s.floor_seed}. "
+        f"Block of {s.block_size:g} in at {list(s.block_position)}. "
+        f"Robot starting at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg "
+        f"with {', '.join(parts)}. "
+        f"Noise: {noise}; {bias}. {s.frame_rate:g} steps/s; replies are {s.reply_bytes}-byte "
+        f"floats; SimMeR TCP on {s.host}:{s.port_rx}/{s.port_tx}."
+    )

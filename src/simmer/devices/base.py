@@ -1,0 +1,160 @@
+"""The device interface every device kind honours, built-in or a user's own.
+
+A device kind is a subclass of :class:`Device` with
+
+* ``category``: ``"motor"``, ``"drive"`` or ``"sensor"`` (which configuration table it lives in);
+* ``Params``: a :class:`DeviceParams` subclass (a pydantic model) listing its settings with
+  defaults, so a configuration is checked before anything runs;
+* ``simulate(value, world) -> float``: answer one command addressed to the device;
+* optionally ``update(world)``: called once per simulation step (a gyroscope integrates here);
+* optionally ``shapes(world)``: what to draw of its latest measurement.
+
+It is registered by name with :func:`simmer.devices.register_device_kind`. The constructor takes
+the device id, its validated parameters and the simulation's random generator: every random
+draw must come from that generator, so a seeded run is repeatable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from simmer.geometry import FloatArray, Pose, Vec2, rectangle, rotate
+
+if TYPE_CHECKING:
+    from simmer.world.maze import Block, Maze
+    from simmer.world.robot import Robot
+
+Category = Literal["motor", "drive", "sensor"]
+Color = tuple[int, int, int]
+
+
+class DeviceParams(BaseModel):
+    """Settings every device has (BEHAVIOUR §4). Kinds subclass this to add their own."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    type: str = Field(description="Registered device kind, e.g. 'ultrasonic'.")
+    position: tuple[float, float] | tuple[float, float, float] = Field(
+        (0.0, 0.0), description="[x, y] (optionally [x, y, height]) in the robot frame, inches."
+    )
+    rotation: float = Field(0.0, description="Degrees from the robot's +y axis.")
+    visible: bool = Field(True, description="Draw the device's outline.")
+    outline: tuple[tuple[float, float], ...] | None = Field(
+        None, min_length=3, description="Polygon in the device frame; the kind's default if unset."
+    )
+    color: Color = Field((0, 0, 255), description="RGB colour of the outline.")
+
+    def problems(self) -> list[tuple[str, str]]:
+        """Mistakes that involve several settings, as (key, message) pairs; none by default."""
+        return []
+
+
+class World(Protocol):
+    """What a device may look at when it simulates: the simulation implements this."""
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since the start."""
+        ...
+
+    @property
+    def dt(self) -> float:
+        """Length of one step in seconds (1 / frame_rate)."""
+        ...
+
+    @property
+    def maze(self) -> Maze:
+        """The maze: walls and floor."""
+        ...
+
+    @property
+    def block(self) -> Block:
+        """The block."""
+        ...
+
+    @property
+    def robot(self) -> Robot:
+        """The robot the device is mounted on."""
+        ...
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A line to draw, world frame, inches."""
+
+    start: Vec2
+    end: Vec2
+    color: Color
+
+
+@dataclass(frozen=True)
+class Circle:
+    """A circle to draw, world frame, inches."""
+
+    center: Vec2
+    radius: float
+    color: Color
+
+
+Shape = Segment | Circle
+
+
+class Device:
+    """Base class of every device kind; see the module docstring for the interface."""
+
+    category: ClassVar[Category] = "sensor"
+    kind: ClassVar[str] = ""
+    Params: ClassVar[type[DeviceParams]] = DeviceParams
+    default_outline: ClassVar[FloatArray] = rectangle(1.0, 1.0)
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        self.id = device_id
+        self.params = params
+        self.rng = rng
+        self.position = Vec2(params.position[0], params.position[1])
+        self.rotation = float(params.rotation)
+        self.visible = params.visible
+        self.outline: FloatArray = (
+            np.asarray(params.outline, dtype=np.float64)
+            if params.outline is not None
+            else self.default_outline.copy()
+        )
+
+    # -- the interface -------------------------------------------------------------------
+
+    def simulate(self, value: float, world: World) -> float:
+        """Answer one command addressed to this device; override in every kind."""
+        raise NotImplementedError
+
+    def update(self, world: World) -> None:
+        """Advance per-step state (called once per step); most devices need nothing here."""
+
+    def shapes(self, world: World) -> list[Shape]:
+        """Shapes showing the latest measurement, for the renderer; none by default."""
+        return []
+
+    # -- helpers for kinds ---------------------------------------------------------------
+
+    @property
+    def mount_height(self) -> float | None:
+        """Height from the optional third position value, if given."""
+        return self.params.position[2] if len(self.params.position) == 3 else None
+
+    def world_pose(self, robot_pose: Pose) -> Pose:
+        """Where the device is, and which way it faces, in the world."""
+        offset = rotate(self.position.x, self.position.y, robot_pose.heading)
+        return Pose(
+            robot_pose.x + offset.x,
+            robot_pose.y + offset.y,
+            robot_pose.heading + self.rotation,
+        )
+
+    def percent_error(self, value: float, error: float) -> float:
+        """SimMeR's percent error: ``value + gauss(0, 2) · error · value`` (BEHAVIOUR §4)."""
+        if error == 0.0:
+            return value
+        return value + float(self.rng.normal(0.0, 2.0)) * error * value

@@ -1,0 +1,179 @@
+"""Drive: an abstract device that moves or turns the robot over several steps (BEHAVIOUR §5.2).
+
+``w0-5`` moves 5 in along the drive's velocity (or turns 5° for a rotational drive). The
+command is refused with NaN while any drive of the robot is moving and accepted with +inf.
+Each step the drive advances by at most ``speed / frame_rate``; the motion carries the drive's
+bias, and the motors' odometers advance even if a collision undoes the motion.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from simmer.devices.base import Category, Device, DeviceParams, World
+from simmer.devices.motor import Motor
+from simmer.errors import CommandError
+
+
+class Axes(BaseModel):
+    """A value along robot x, robot y and rotation (used for drive bias and error)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    x: float = 0.0
+    y: float = 0.0
+    rotation: float = 0.0
+
+
+class DriveParams(DeviceParams):
+    """Drive settings: exactly one of ``velocity`` / ``ang_velocity`` is non-zero."""
+
+    type: str = "drive"
+    visible: bool = False
+    velocity: tuple[float, float] = Field(
+        (0.0, 0.0), description="Translation speed [vx, vy] in in/s, robot frame."
+    )
+    ang_velocity: float = Field(0.0, description="Rotation speed in deg/s (clockwise positive).")
+    motors: tuple[str, ...] = Field((), description="Ids of the motors this drive turns.")
+    motor_direction: tuple[float, ...] = Field((), description="+1 or -1 for each motor.")
+    bias: Axes = Field(Axes(), description="Systematic extra motion per unit commanded.")
+    error: Axes = Field(Axes(), description="Percent error of the commanded amount.")
+
+    def problems(self) -> list[tuple[str, str]]:
+        """Cross-field mistakes, as (key, message) pairs."""
+        found: list[tuple[str, str]] = []
+        translates = self.velocity != (0.0, 0.0)
+        rotates = self.ang_velocity != 0.0
+        if translates and rotates:
+            found.append(
+                (
+                    "ang_velocity",
+                    "a drive either translates (velocity) or rotates (ang_velocity), never both; "
+                    "make two drives, or set one of them to 0",
+                )
+            )
+        if not translates and not rotates:
+            found.append(
+                ("velocity", "the drive never moves: give a non-zero velocity or ang_velocity")
+            )
+        if len(self.motors) != len(self.motor_direction):
+            found.append(
+                (
+                    "motor_direction",
+                    f"has {len(self.motor_direction)} entries but motors has "
+                    f"{len(self.motors)}; give one direction (+1 or -1) per motor",
+                )
+            )
+        for i, direction in enumerate(self.motor_direction):
+            if direction not in (1.0, -1.0):
+                found.append((f"motor_direction[{i}]", f"must be 1 or -1, not {direction:g}"))
+        return found
+
+
+@dataclass(frozen=True)
+class Motion:
+    """One step of commanded motion in the robot frame, plus the amount it used up."""
+
+    dx: float
+    dy: float
+    rotation: float
+    step: float
+
+
+class Drive(Device):
+    """A drive (see the module docstring)."""
+
+    category: ClassVar[Category] = "drive"
+    Params = DriveParams
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, DriveParams)
+        self.settings = params
+        self.bias = params.bias
+        self.rotational = params.ang_velocity != 0.0
+        if self.rotational:
+            self.speed = abs(params.ang_velocity)
+            self.unit = (0.0, 0.0)
+        else:
+            self.speed = math.hypot(*params.velocity)
+            self.unit = (params.velocity[0] / self.speed, params.velocity[1] / self.speed)
+        self.motors: list[Motor] = []
+        self.gains: list[float] = []
+        self.remaining = 0.0
+
+    def bind_motors(self, motors: list[Motor]) -> None:
+        """Attach the motor devices named in the configuration and work out odometer gains."""
+        self.motors = motors
+        self.gains = [
+            self._odometer_gain(motor, direction)
+            for motor, direction in zip(motors, self.settings.motor_direction, strict=True)
+        ]
+
+    def _odometer_gain(self, motor: Motor, direction: float) -> float:
+        """Inches of wheel travel per unit of drive travel (BEHAVIOUR §5.2)."""
+        rad = math.radians(motor.rotation)
+        pointing = (-math.sin(rad), math.cos(rad))
+        if self.rotational:
+            px, py = motor.position
+            radius = math.hypot(px, py)
+            if radius == 0.0:
+                return 0.0
+            tangent = (-py / radius, px / radius)
+            cos_a = abs(tangent[0] * pointing[0] + tangent[1] * pointing[1])
+            scale = 2.0 * math.pi * radius / 360.0
+        else:
+            cos_a = abs(self.unit[0] * pointing[0] + self.unit[1] * pointing[1])
+            scale = 1.0
+        if cos_a < 1e-12:
+            return 0.0
+        return scale * direction / cos_a
+
+    @property
+    def moving(self) -> bool:
+        """True while commanded motion remains."""
+        return self.remaining != 0.0
+
+    def set_bias(self, bias: Axes) -> None:
+        """Replace the bias (used when ``rand_bias`` draws one at start)."""
+        self.bias = bias
+
+    def simulate(self, value: float, world: World) -> float:
+        """Start moving by ``value`` (in or deg): +inf if accepted, NaN if a drive is busy."""
+        if not math.isfinite(value):
+            raise CommandError(f"drive {self.id}: {value!r} is not a distance")
+        if world.robot.any_drive_moving:
+            return math.nan
+        error = self.settings.error
+        error_total = self.unit[0] * error.x + self.unit[1] * error.y
+        if self.rotational:
+            error_total += error.rotation
+        self.remaining = self.percent_error(value, error_total)
+        return math.inf
+
+    def stop(self) -> None:
+        """Clear any remaining motion (the ``xx`` emergency stop)."""
+        self.remaining = 0.0
+
+    def advance(self, dt: float) -> Motion:
+        """Use up one step of the remaining motion, turn the motors, return the motion."""
+        limit = self.speed * dt
+        step = math.copysign(min(abs(self.remaining), limit), self.remaining)
+        self.remaining -= step
+        if abs(self.remaining) < 1e-12:
+            self.remaining = 0.0
+        for motor, gain in zip(self.motors, self.gains, strict=True):
+            motor.odometer += step * gain
+        bias = self.bias
+        rotation = step * bias.rotation + (step if self.rotational else 0.0)
+        return Motion(
+            dx=self.unit[0] * step + step * bias.x,
+            dy=self.unit[1] * step + step * bias.y,
+            rotation=rotation,
+            step=step,
+        )

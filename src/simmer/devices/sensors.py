@@ -1,0 +1,263 @@
+"""The four built-in sensor kinds: ultrasonic, gyroscope, compass, infrared (BEHAVIOUR §5.3-5.6)."""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar, Literal
+
+import numpy as np
+from pydantic import Field
+
+from simmer.devices.base import Circle, Color, Device, DeviceParams, Segment, Shape, World
+from simmer.geometry import (
+    FloatArray,
+    Vec2,
+    cast_fan,
+    disk_samples,
+    heading_vector,
+    rectangle,
+    white_fraction,
+    wrap_degrees,
+)
+
+# ----------------------------------------------------------------------------- ultrasonic
+
+
+class UltrasonicParams(DeviceParams):
+    """Ultrasonic range finder settings (defaults as SimMeR's)."""
+
+    type: str = "ultrasonic"
+    height: float | None = Field(
+        None, gt=0, description="Mounting height in inches; defaults to the block size."
+    )
+    beamwidth: float = Field(15.0, gt=0, lt=180, description="Cone angle in degrees.")
+    num_rays: int = Field(7, ge=1, le=1000, description="Rays cast across the cone.")
+    min_range: float = Field(0.0, ge=0, description="Shortest reading, inches.")
+    max_range: float = Field(433.0, gt=0, description="Longest reading, inches.")
+    error: float = Field(0.02, ge=0, description="Percent error (SimMeR's, sd 2·error).")
+    visible_measurement: bool = Field(True, description="Draw the rays after a read.")
+    visible_measurement_time: float = Field(0.5, ge=0, description="How long, in seconds.")
+    ray_color: Color = Field((0, 255, 0), description="RGB colour of the drawn rays.")
+
+    def problems(self) -> list[tuple[str, str]]:
+        """Cross-field mistakes, as (key, message) pairs."""
+        if self.max_range <= self.min_range:
+            return [
+                (
+                    "max_range",
+                    f"must be greater than min_range ({self.min_range:g}), got {self.max_range:g}",
+                )
+            ]
+        return []
+
+
+class Ultrasonic(Device):
+    """Shortest distance at which any ray of the cone meets a wall (or the block, if seen)."""
+
+    Params = UltrasonicParams
+    default_outline: ClassVar[FloatArray] = rectangle(2.0, 1.0)
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, UltrasonicParams)
+        self.settings = params
+        self.rays = np.full(params.num_rays, math.inf)
+        self.last_time = -math.inf
+        self.last_origin = Vec2(0.0, 0.0)
+        self.last_heading = 0.0
+        self.reading = math.nan
+
+    def height(self, world: World) -> float:
+        """Mounting height: ``height``, else the third position value, else the block size."""
+        if self.settings.height is not None:
+            return self.settings.height
+        return self.mount_height if self.mount_height is not None else world.block.size
+
+    def sees_block(self, world: World, x: float, y: float) -> bool:
+        """Block visibility: ``atan(h / d) <= beamwidth / 2`` (BEHAVIOUR §5.3)."""
+        block = world.block
+        h = self.height(world) - block.size
+        d = math.hypot(block.x - x, block.y - y)
+        return math.degrees(math.atan2(h, d)) <= self.settings.beamwidth / 2.0
+
+    def simulate(self, value: float, world: World) -> float:
+        """Measure the distance in inches, with noise, clamped to [min_range, max_range]."""
+        s = self.settings
+        pose = self.world_pose(world.robot.pose)
+        maze = world.maze
+        distance = cast_fan(
+            maze.hwall,
+            maze.vwall,
+            maze.cell,
+            maze.segments,
+            world.block.segments,
+            self.sees_block(world, pose.x, pose.y),
+            pose.x,
+            pose.y,
+            pose.heading,
+            s.beamwidth,
+            s.max_range,
+            self.rays,
+        )
+        if math.isinf(distance):
+            reading = s.max_range
+        else:
+            reading = min(max(self.percent_error(distance, s.error), s.min_range), s.max_range)
+        self.last_time = world.time
+        self.last_origin = Vec2(pose.x, pose.y)
+        self.last_heading = pose.heading
+        self.reading = reading
+        return reading
+
+    def shapes(self, world: World) -> list[Shape]:
+        """The rays of the last read, while it is recent enough to show."""
+        s = self.settings
+        if not s.visible_measurement or world.time - self.last_time > s.visible_measurement_time:
+            return []
+        n = s.num_rays
+        out: list[Shape] = []
+        for k in range(n):
+            length = min(float(self.rays[k]), s.max_range)
+            direction = heading_vector(self.last_heading + ((k - (n - 1) / 2.0) / n) * s.beamwidth)
+            end = Vec2(
+                self.last_origin.x + direction.x * length, self.last_origin.y + direction.y * length
+            )
+            out.append(Segment(self.last_origin, end, s.ray_color))
+        return out
+
+
+# ----------------------------------------------------------------------------- gyroscope
+
+
+class GyroscopeParams(DeviceParams):
+    """Gyroscope settings."""
+
+    type: str = "gyroscope"
+    bias: float = Field(0.1, description="Drift in degrees per second.")
+    error: float = Field(0.2, ge=0, description="Percent error on each step's change.")
+
+
+class Gyroscope(Device):
+    """Integrates the heading change each step, with drift and noise; wraps to [0, 360)."""
+
+    Params = GyroscopeParams
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, GyroscopeParams)
+        self.settings = params
+        self.angle = 0.0
+        self.last_heading: float | None = None
+
+    def update(self, world: World) -> None:
+        """Add this step's true heading change plus drift, with percent error."""
+        heading = world.robot.pose.heading
+        if self.last_heading is None:
+            self.last_heading = heading
+        turned = (heading - self.last_heading + 180.0) % 360.0 - 180.0
+        self.last_heading = heading
+        change = turned + self.settings.bias * world.dt
+        change = self.percent_error(change, self.settings.error)
+        self.angle = wrap_degrees(self.angle + change)
+
+    def simulate(self, value: float, world: World) -> float:
+        """The accumulated angle since the start, in [0, 360)."""
+        return self.angle
+
+
+# ----------------------------------------------------------------------------- compass
+
+
+class CompassParams(DeviceParams):
+    """Compass settings."""
+
+    type: str = "compass"
+    bias: float = Field(0.0, description="Constant offset in degrees.")
+    error: float = Field(
+        0.002, ge=0, description="Noise: standard deviation 2·error·360 degrees (SimMeR's)."
+    )
+
+
+class Compass(Device):
+    """The absolute heading (angle from +y) plus bias and noise, in [0, 360)."""
+
+    Params = CompassParams
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, CompassParams)
+        self.settings = params
+
+    def simulate(self, value: float, world: World) -> float:
+        """Heading in degrees, with noise."""
+        s = self.settings
+        heading = world.robot.pose.heading + self.rotation + s.bias
+        if s.error:
+            heading += float(self.rng.normal(0.0, 2.0)) * s.error * 360.0
+        return wrap_degrees(heading)
+
+
+# ----------------------------------------------------------------------------- infrared
+
+_DISK = disk_samples(256)
+
+
+class InfraredParams(DeviceParams):
+    """Downward infrared floor sensor settings."""
+
+    type: str = "infrared"
+    height: float = Field(3.0, gt=0, description="Height above the floor, inches.")
+    fov: float = Field(60.0, gt=0, lt=180, description="Field of view, degrees.")
+    error: float = Field(0.02, ge=0, description="Percent error on the white fraction.")
+    threshold: float = Field(0.8, ge=0, le=1, description="White fraction that reads 1.")
+    radius_model: Literal["geometric", "simmer"] = Field(
+        "geometric",
+        description="'geometric': radius height·tan(fov/2); 'simmer': the original's "
+        "height·cos(fov/2).",
+    )
+    visible_measurement: bool = True
+    visible_measurement_time: float = Field(0.5, ge=0)
+    color: Color = (255, 128, 0)
+
+
+class Infrared(Device):
+    """Reads 1 when at least ``threshold`` of the floor circle below it is white, else 0."""
+
+    Params = InfraredParams
+    default_outline: ClassVar[FloatArray] = rectangle(0.6, 0.6)
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, InfraredParams)
+        self.settings = params
+        half_fov = math.radians(params.fov / 2.0)
+        trig = math.tan if params.radius_model == "geometric" else math.cos
+        self.radius = params.height * trig(half_fov)
+        self.last_time = -math.inf
+        self.last_center = Vec2(0.0, 0.0)
+        self.reading = math.nan
+
+    def white_fraction(self, world: World) -> float:
+        """Exact-to-1/256 fraction of the sensed floor circle that is white (no noise)."""
+        pose = self.world_pose(world.robot.pose)
+        maze = world.maze
+        self.last_center = Vec2(pose.x, pose.y)
+        return float(
+            white_fraction(maze.floor_white, maze.tile, pose.x, pose.y, self.radius, _DISK)
+        )
+
+    def simulate(self, value: float, world: World) -> float:
+        """1.0 (white) or 0.0 (black)."""
+        s = self.settings
+        fraction = min(max(self.percent_error(self.white_fraction(world), s.error), 0.0), 1.0)
+        self.last_time = world.time
+        self.reading = 1.0 if fraction >= s.threshold else 0.0
+        return self.reading
+
+    def shapes(self, world: World) -> list[Shape]:
+        """The sensed circle of the last read, while recent."""
+        s = self.settings
+        if not s.visible_measurement or world.time - self.last_time > s.visible_measurement_time:
+            return []
+        color = (0, 200, 0) if self.reading == 1.0 else s.color
+        return [Circle(self.last_center, self.radius, color)]

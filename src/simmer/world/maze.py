@@ -1,0 +1,151 @@
+"""The maze (walls and floor pattern) and the block (BEHAVIOUR §2-3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simmer.config.models import Settings
+from simmer.geometry import BoolArray, FloatArray, place_polygon, rectangle
+
+
+def floor_pattern(cols: int, rows: int, cell: float, tile: float, seed: int) -> BoolArray:
+    """SimMeR's floor: True = white, indexed [row, column] of tiles.
+
+    Bit-identical to the original (and so to the painted lab maze): NumPy's legacy Mersenne
+    Twister seeded with ``seed`` draws ``n_x · n_y`` values; tile (ix, iy) takes draw
+    ``ix · n_y + iy`` and is white when it is at least 0.5.
+    """
+    n_x = math.ceil(round(cols * cell / tile, 9))
+    n_y = math.ceil(round(rows * cell / tile, 9))
+    draws = np.random.RandomState(seed).random(n_x * n_y)
+    result: BoolArray = (draws.reshape(n_x, n_y) >= 0.5).T.copy()
+    return result
+
+
+@dataclass
+class Maze:
+    """Walls on a grid of square cells, and the floor tiles.
+
+    ``solid[r, c]`` is True for blocked cells. ``hwall[r, c]`` marks a wall on the horizontal
+    grid line y = r·cell over column c; ``vwall[r, c]`` one on the vertical line x = c·cell over
+    row r. An edge is a wall on the outer boundary, or between a solid and an open cell.
+    """
+
+    cells: tuple[tuple[int, ...], ...]
+    cell: float
+    tile: float
+    floor_seed: int
+    solid: BoolArray = field(init=False)
+    hwall: BoolArray = field(init=False)
+    vwall: BoolArray = field(init=False)
+    segments: FloatArray = field(init=False)
+    floor_white: BoolArray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.solid = np.array(self.cells, dtype=np.int64) == 0
+        rows, cols = self.solid.shape
+        padded = np.pad(self.solid, 1, constant_values=True)
+        self.hwall = padded[:-1, 1:-1] != padded[1:, 1:-1]
+        self.vwall = padded[1:-1, :-1] != padded[1:-1, 1:]
+        self.hwall[0, :] = True
+        self.hwall[rows, :] = True
+        self.vwall[:, 0] = True
+        self.vwall[:, cols] = True
+        self.segments = _merged_segments(self.hwall, self.vwall, self.cell)
+        self.floor_white = floor_pattern(cols, rows, self.cell, self.tile, self.floor_seed)
+
+    @classmethod
+    def from_settings(cls, settings: Settings) -> Maze:
+        """Build the maze a configuration describes."""
+        return cls(
+            settings.walls,
+            settings.wall_segment_length,
+            settings.floor_segment_length,
+            settings.floor_seed,
+        )
+
+    @property
+    def rows(self) -> int:
+        """Number of cell rows."""
+        return int(self.solid.shape[0])
+
+    @property
+    def cols(self) -> int:
+        """Number of cell columns."""
+        return int(self.solid.shape[1])
+
+    @property
+    def width(self) -> float:
+        """Maze width in inches."""
+        return self.cols * self.cell
+
+    @property
+    def height(self) -> float:
+        """Maze height in inches."""
+        return self.rows * self.cell
+
+    def open_cell_centre(self) -> list[float]:
+        """Centre of the first open cell (for error-message suggestions)."""
+        rows, cols = np.nonzero(~self.solid)
+        return [(cols[0] + 0.5) * self.cell, (rows[0] + 0.5) * self.cell]
+
+    def tile_at(self, x: float, y: float) -> tuple[int, int]:
+        """(row, column) of the floor tile under a world point."""
+        return int(math.floor(y / self.tile)), int(math.floor(x / self.tile))
+
+
+def _merged_segments(hwall: BoolArray, vwall: BoolArray, cell: float) -> FloatArray:
+    """Wall segments (N, 4: x1, y1, x2, y2), collinear touching pieces merged."""
+    segments: list[tuple[float, float, float, float]] = []
+    for r, line in enumerate(hwall):
+        for start, stop in _runs(line):
+            segments.append((start * cell, r * cell, stop * cell, r * cell))
+    for c, line in enumerate(vwall.T):
+        for start, stop in _runs(line):
+            segments.append((c * cell, start * cell, c * cell, stop * cell))
+    return np.array(segments, dtype=np.float64).reshape(-1, 4)
+
+
+def _runs(line: BoolArray) -> list[tuple[int, int]]:
+    """[start, stop) index pairs of the runs of True in a boolean line."""
+    padded = np.concatenate(([False], line, [False])).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+@dataclass
+class Block:
+    """The cube the robot must find: centre, rotation (degrees from +y) and side."""
+
+    x: float
+    y: float
+    rotation: float
+    size: float
+    polygon: FloatArray = field(init=False)
+    segments: FloatArray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.place(self.x, self.y, self.rotation)
+
+    @classmethod
+    def from_settings(cls, settings: Settings) -> Block:
+        """The block a configuration describes."""
+        x, y = settings.block_position
+        return cls(x, y, settings.block_rotation, settings.block_size)
+
+    def place(self, x: float, y: float, rotation: float) -> None:
+        """Move the block (keeps its outline and edge segments in step)."""
+        self.x, self.y, self.rotation = x, y, rotation
+        self.polygon = np.empty((4, 2))
+        place_polygon(rectangle(self.size, self.size), x, y, rotation, self.polygon)
+        self.segments = np.hstack((self.polygon, np.roll(self.polygon, -1, axis=0)))
+
+
+def robot_outline(settings: Settings) -> FloatArray:
+    """The robot's outline in its own frame: ``robot_outline``, or a square of ``robot_width``."""
+    if settings.robot_outline is not None:
+        return np.asarray(settings.robot_outline, dtype=np.float64)
+    return rectangle(settings.robot_width, settings.robot_width)

@@ -1,0 +1,288 @@
+"""The simulation: a world of maze, block and robot, stepped at a fixed rate.
+
+One thread owns a :class:`Simulation`; transports hand it commands through a queue (see
+``simmer.transport``) and never touch it themselves. All randomness comes from one seeded
+``numpy.random.Generator`` per simulation, so a run is repeatable from its seed.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from simmer.config.loader import load_config
+from simmer.config.models import SimConfig
+from simmer.devices import Axes, Device, Drive, get_device_kind
+from simmer.errors import CommandError
+from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
+from simmer.protocol import STOP_ID, Command, parse_message
+from simmer.world.events import (
+    CollisionEvent,
+    CommandEvent,
+    Event,
+    Observer,
+    ResetEvent,
+    StepEvent,
+)
+from simmer.world.maze import Block, Maze, robot_outline
+from simmer.world.robot import Robot
+
+log = logging.getLogger("simmer")
+
+MANUAL_SPEED = 6.0  # in/s, BEHAVIOUR §3
+MANUAL_TURN = 120.0  # deg/s
+MANUAL_KEYS = "wasdqe"
+
+
+class Simulation:
+    """A headless, deterministic simulation of one robot in one maze.
+
+    Use :meth:`from_config` to build one, :meth:`command` to talk to the robot as a control
+    program would, and :meth:`step` / :meth:`run_until_idle` to let simulated time pass.
+    """
+
+    def __init__(self, config: SimConfig, seed: int | None = None) -> None:
+        self.config = config
+        settings = config.settings
+        if seed is not None:
+            self.seed = seed
+        elif settings.rand_error:
+            self.seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
+        else:
+            self.seed = settings.seed if settings.seed is not None else settings.floor_seed
+        self.maze = Maze.from_settings(settings)
+        self._dt = 1.0 / settings.frame_rate
+        self.observers: list[Observer] = []
+        self._simulate_list = settings.simulate_list
+        self._build()
+
+    @classmethod
+    def from_config(cls, path: str | Path | None = None, seed: int | None = None) -> Simulation:
+        """Load a configuration file (None: the built-in default) and build a simulation."""
+        return cls(load_config(path), seed=seed)
+
+    def _build(self) -> None:
+        """Create robot, block and devices at their start, with a fresh generator."""
+        settings = self.config.settings
+        self.rng = np.random.default_rng(self.seed)
+        self._block = Block.from_settings(settings)
+        devices: list[Device] = []
+        for spec in self.config.devices:
+            kind = get_device_kind(spec.kind)
+            if kind is None:
+                raise CommandError(f"device kind {spec.kind!r} is no longer registered")
+            devices.append(kind(spec.id, spec.params, self.rng))
+        start = Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+        self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
+        for drive in self._robot.drives.values():
+            drive.bind_motors([self._robot.motors[m] for m in drive.settings.motors])
+            if settings.rand_bias:
+                drive.set_bias(self._draw_bias(drive))
+        self._time = 0.0
+        self.frame = 0
+        self.collisions = 0
+        self.blocked_steps = 0
+        self._was_blocked = False
+        self.manual_keys: frozenset[str] = frozenset()
+
+    def _draw_bias(self, drive: Drive) -> Axes:
+        """``rand_bias``: x, y ~ N(0, linear); rotation ~ N(0, rotational) for a translating
+        drive (degrees per inch), N(0, linear) for a rotating one (a fraction, like x and y)."""
+        linear, rotational = self.config.settings.bias_strength
+        x, y = self.rng.normal(0.0, linear, 2) if linear else (0.0, 0.0)
+        spread = linear if drive.rotational else rotational
+        rotation = float(self.rng.normal(0.0, spread)) if spread else 0.0
+        return Axes(x=float(x), y=float(y), rotation=rotation)
+
+    # ----------------------------------------------------------------- the World protocol
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since the start."""
+        return self._time
+
+    @property
+    def dt(self) -> float:
+        """Seconds per step (1 / frame_rate)."""
+        return self._dt
+
+    @property
+    def block(self) -> Block:
+        """The block."""
+        return self._block
+
+    @property
+    def robot(self) -> Robot:
+        """The robot."""
+        return self._robot
+
+    # ----------------------------------------------------------------- commands
+
+    def command(self, message: str) -> list[float]:
+        """Execute a message such as ``"w0-6,u0"``; one reply value per command, in order.
+
+        A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
+        an unknown device answers NaN and logs why.
+        """
+        commands = parse_message(message)
+        replies = [self.execute(command) for command in commands]
+        if self.observers:
+            self._emit(CommandEvent(self._time, message, tuple(replies)))
+        return replies
+
+    def execute(self, command: Command) -> float:
+        """Execute one parsed command and return its reply value."""
+        if command.error is not None:
+            log.warning("bad command %r: %s", command.text, command.error)
+            return math.nan
+        if command.device == STOP_ID:
+            self._robot.stop()
+            return math.inf
+        device = self._robot.devices.get(command.device)
+        if device is None:
+            log.warning("bad command %r: no device %r on the robot", command.text, command.device)
+            return math.nan
+        try:
+            return float(device.simulate(command.value, self))
+        except CommandError as exc:
+            log.warning("bad command %r: %s", command.text, exc)
+        except Exception:
+            log.exception("device %r failed on command %r", command.device, command.text)
+        return math.nan
+
+    # ----------------------------------------------------------------- time
+
+    def step(self, n: int = 1) -> None:
+        """Advance the simulation by ``n`` steps of ``1 / frame_rate`` seconds."""
+        for _ in range(n):
+            self._step_once()
+
+    def run_until_idle(self, max_seconds: float = 600.0) -> bool:
+        """Step until no drive is moving; False if still moving after ``max_seconds`` (simulated)."""
+        limit = self._time + max_seconds
+        robot = self._robot
+        while robot.any_drive_moving:
+            if self._time >= limit:
+                return False
+            self._step_once()
+        return True
+
+    def _step_once(self) -> None:
+        robot = self._robot
+        dt = self._dt
+        dx = dy = rotation = 0.0
+        moved = False
+        if self.manual_keys:
+            dx, dy, rotation = self._manual_motion(dt)
+            moved = True
+        else:
+            for drive in robot.drives.values():
+                if drive.remaining != 0.0:
+                    motion = drive.advance(dt)
+                    dx += motion.dx
+                    dy += motion.dy
+                    rotation += motion.rotation
+                    moved = True
+        if moved:
+            self._move(dx, dy, rotation)
+        self._time = (self.frame + 1) * dt
+        self.frame += 1
+        for device in robot.updating:
+            device.update(self)
+        for sensor_id in self._simulate_list:
+            robot.sensors[sensor_id].simulate(0.0, self)
+        if self.observers:
+            self._emit(StepEvent(self._time, robot.pose))
+
+    def _move(self, dx: float, dy: float, rotation: float) -> None:
+        """Apply a robot-frame motion unless it would touch a wall or the block."""
+        robot = self._robot
+        pose = robot.pose
+        offset = rotate(dx, dy, pose.heading)
+        target = Pose(pose.x + offset.x, pose.y + offset.y, wrap_degrees(pose.heading + rotation))
+        maze = self.maze
+        if robot_blocked(
+            robot.outline,
+            target.x,
+            target.y,
+            target.heading,
+            robot.scratch,
+            maze.hwall,
+            maze.vwall,
+            maze.solid,
+            maze.cell,
+            self._block.polygon,
+        ):
+            self.blocked_steps += 1
+            if not self._was_blocked:
+                self.collisions += 1
+                self._was_blocked = True
+                if self.observers:
+                    self._emit(CollisionEvent(self._time, pose))
+            return
+        self._was_blocked = False
+        robot.pose = target
+
+    # ----------------------------------------------------------------- manual control
+
+    def set_manual_keys(self, keys: Iterable[str]) -> None:
+        """Hold these manual-driving keys (subset of ``wasdqe``) until the next call.
+
+        w/s forward/back, q/e sideways toward robot +x/-x, d/a turn clockwise/anticlockwise, at
+        6 in/s and 120 deg/s, never noisy, odometers untouched; commanded motion pauses.
+        """
+        held = frozenset(k.lower() for k in keys)
+        unknown = held - set(MANUAL_KEYS)
+        if unknown:
+            raise ValueError(f"manual keys are {MANUAL_KEYS}, not {''.join(sorted(unknown))}")
+        self.manual_keys = held
+
+    def _manual_motion(self, dt: float) -> tuple[float, float, float]:
+        keys = self.manual_keys
+        step = MANUAL_SPEED * dt
+        turn = MANUAL_TURN * dt
+        dy = step * (("w" in keys) - ("s" in keys))
+        dx = step * (("q" in keys) - ("e" in keys))
+        rotation = turn * (("d" in keys) - ("a" in keys))
+        return dx, dy, rotation
+
+    def place_robot(self, x: float, y: float, heading: float) -> bool:
+        """Move the robot to a pose if it fits there (no wall, block or outside); True if moved."""
+        maze = self.maze
+        robot = self._robot
+        heading = wrap_degrees(heading)
+        if robot_blocked(
+            robot.outline,
+            x,
+            y,
+            heading,
+            robot.scratch,
+            maze.hwall,
+            maze.vwall,
+            maze.solid,
+            maze.cell,
+            self._block.polygon,
+        ):
+            return False
+        robot.pose = Pose(x, y, heading)
+        return True
+
+    # ----------------------------------------------------------------- lifecycle
+
+    def reset(self) -> None:
+        """Put robot, block, devices, time and the random generator back to the start."""
+        self._build()
+        if self.observers:
+            self._emit(ResetEvent(self._time))
+
+    def add_observer(self, observer: Observer) -> None:
+        """Call ``observer(event)`` for every command, step, collision and reset."""
+        self.observers.append(observer)
+
+    def _emit(self, event: Event) -> None:
+        for observer in self.observers:
+            observer(event)
