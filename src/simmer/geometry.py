@@ -234,6 +234,14 @@ def cast_fan(
 
 
 @_jit
+def _within(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> bool:
+    """True if (px, py) lies in the bounding box of segment AB (for collinear points)."""
+    return (min(ax, bx) - _EPS <= px <= max(ax, bx) + _EPS) and (
+        min(ay, by) - _EPS <= py <= max(ay, by) + _EPS
+    )
+
+
+@_jit
 def _segments_cross(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float
 ) -> bool:
@@ -246,19 +254,12 @@ def _segments_cross(
         (d3 > 0 and d4 < 0) or (d3 < 0 and d4 > 0)
     ):
         return True
-    if abs(d1) <= _EPS and min(cx, dx) - _EPS <= ax <= max(cx, dx) + _EPS:
-        if min(cy, dy) - _EPS <= ay <= max(cy, dy) + _EPS:
-            return True
-    if abs(d2) <= _EPS and min(cx, dx) - _EPS <= bx <= max(cx, dx) + _EPS:
-        if min(cy, dy) - _EPS <= by <= max(cy, dy) + _EPS:
-            return True
-    if abs(d3) <= _EPS and min(ax, bx) - _EPS <= cx <= max(ax, bx) + _EPS:
-        if min(ay, by) - _EPS <= cy <= max(ay, by) + _EPS:
-            return True
-    if abs(d4) <= _EPS and min(ax, bx) - _EPS <= dx <= max(ax, bx) + _EPS:
-        if min(ay, by) - _EPS <= dy <= max(ay, by) + _EPS:
-            return True
-    return False
+    return (
+        (abs(d1) <= _EPS and _within(ax, ay, cx, cy, dx, dy))
+        or (abs(d2) <= _EPS and _within(bx, by, cx, cy, dx, dy))
+        or (abs(d3) <= _EPS and _within(cx, cy, ax, ay, bx, by))
+        or (abs(d4) <= _EPS and _within(dx, dy, ax, ay, bx, by))
+    )
 
 
 @_jit
@@ -376,7 +377,7 @@ def white_fraction(
         iy = int(math.floor((cy + radius * samples[i, 1]) / tile))
         if 0 <= ix < cols and 0 <= iy < rows and floor_white[iy, ix]:
             white += 1
-    return white / n
+    return float(white) / float(n)
 
 
 @_jit

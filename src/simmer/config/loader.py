@@ -40,9 +40,10 @@ def load_config(path: str | Path | None = None) -> SimConfig:
             path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
         )
     if path.suffix == ".py":
-        from simmer.config.simmer_py import load_simmer_py
+        from simmer.config.simmer_py import load_simmer_py  # type: ignore[import-not-found]
 
-        return load_simmer_py(path)
+        loaded: SimConfig = load_simmer_py(path)
+        return loaded
     return config_from_toml(path.read_text(encoding="utf-8"), str(path), path.parent)
 
 
@@ -77,7 +78,7 @@ def _toml_error_line(message: str) -> int | None:
 
 
 def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimConfig:
-    """Validate a configuration given as plain data; raise :class:`ConfigError` listing every issue."""
+    """Validate configuration data; raise :class:`ConfigError` listing every issue found."""
     data = dict(data)
     issues: list[ConfigIssue] = []
     groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
@@ -90,6 +91,7 @@ def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimCo
         issues += _issues_from_validation(exc, "", Settings)
 
     devices = _validate_devices(groups, issues)
+    issues += _check_drive_motors(devices)
     if settings is not None:
         issues += _check_walls(settings)
         issues += _check_references(settings, devices)
@@ -122,7 +124,7 @@ def _load_plugins(plugins: Any, base_dir: Path) -> list[ConfigIssue]:
                     "give a path relative to the configuration file",
                 )
             )
-        except Exception as exc:  # noqa: BLE001 - any error in user code becomes an issue
+        except Exception as exc:
             issues.append(ConfigIssue(f"plugins[{i}]", _describe_plugin_error(entry, exc)))
     return issues
 
@@ -136,7 +138,8 @@ def _import_plugin(entry: str, base_dir: Path) -> None:
         if name in sys.modules:
             return
         spec = importlib.util.spec_from_file_location(name, path)
-        assert spec is not None and spec.loader is not None
+        if spec is None or spec.loader is None:
+            raise ImportError(f"cannot import {path}")
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         try:
@@ -246,8 +249,8 @@ def _validate_device(
         issues.append(
             ConfigIssue(
                 f"{key}.type",
-                f"{kind_name!r} is a {kind.category}, so it belongs in [{kind.category}s.{device_id}]"
-                f", not [{group}.{device_id}]",
+                f"{kind_name!r} is a {kind.category}, so it belongs in "
+                f"[{kind.category}s.{device_id}], not [{group}.{device_id}]",
             )
         )
         return None
@@ -294,11 +297,9 @@ def _check_walls(settings: Settings) -> list[ConfigIssue]:
     return issues
 
 
-def _check_references(settings: Settings, devices: list[DeviceSpec]) -> list[ConfigIssue]:
+def _check_drive_motors(devices: list[DeviceSpec]) -> list[ConfigIssue]:
     issues = []
-    by_id = {spec.id: spec for spec in devices}
     motor_ids = [spec.id for spec in devices if spec.group == "motors"]
-    sensor_ids = [spec.id for spec in devices if spec.group == "sensors"]
     for spec in devices:
         if spec.group != "drives":
             continue
@@ -312,6 +313,13 @@ def _check_references(settings: Settings, devices: list[DeviceSpec]) -> list[Con
                         f"no motor {motor!r}{hint}; the motors are: {known}",
                     )
                 )
+    return issues
+
+
+def _check_references(settings: Settings, devices: list[DeviceSpec]) -> list[ConfigIssue]:
+    issues = []
+    by_id = {spec.id: spec for spec in devices}
+    sensor_ids = [spec.id for spec in devices if spec.group == "sensors"]
     for i, device_id in enumerate(settings.simulate_list):
         if device_id not in sensor_ids:
             what = (
@@ -424,6 +432,9 @@ def _issues_from_validation(
             name = str(loc[-1])
             hint = _did_you_mean(name, _fields_at(model, loc[:-1]))
             message = f"unknown key{hint}; check its spelling or delete it"
+        elif kind == "missing" and loc and isinstance(loc[-1], int):
+            loc = loc[:-1]
+            message = f"has too few values (value number {error['loc'][-1] + 1} is missing)"
         elif kind == "missing":
             message = "required key is missing"
         else:
@@ -459,7 +470,8 @@ def summarize(config: SimConfig) -> str:
         else "drive biases as configured"
     )
     return (
-        f"Maze of {cols} x {rows} cells of {length:g} in ({cols * length:g} x {rows * length:g} in), "
+        f"Maze of {cols} x {rows} cells of {length:g} in "
+        f"({cols * length:g} x {rows * length:g} in), "
         f"floor tiles of {s.floor_segment_length:g} in from seed {s.floor_seed}. "
         f"Block of {s.block_size:g} in at {list(s.block_position)}. "
         f"Robot starting at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg "

@@ -147,16 +147,10 @@ class Gyroscope(Device):
         assert isinstance(params, GyroscopeParams)
         self.settings = params
         self.angle = 0.0
-        self.last_heading: float | None = None
 
     def update(self, world: World) -> None:
         """Add this step's true heading change plus drift, with percent error."""
-        heading = world.robot.pose.heading
-        if self.last_heading is None:
-            self.last_heading = heading
-        turned = (heading - self.last_heading + 180.0) % 360.0 - 180.0
-        self.last_heading = heading
-        change = turned + self.settings.bias * world.dt
+        change = world.robot.turned + self.settings.bias * world.dt
         change = self.percent_error(change, self.settings.error)
         self.angle = wrap_degrees(self.angle + change)
 

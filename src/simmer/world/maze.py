@@ -8,7 +8,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simmer.config.models import Settings
-from simmer.geometry import BoolArray, FloatArray, place_polygon, rectangle
+from simmer.geometry import (
+    BoolArray,
+    FloatArray,
+    heading_vector,
+    place_polygon,
+    ray_grid,
+    ray_segments,
+    rectangle,
+)
 
 
 def floor_pattern(cols: int, rows: int, cell: float, tile: float, seed: int) -> BoolArray:
@@ -92,6 +100,14 @@ class Maze:
         rows, cols = np.nonzero(~self.solid)
         return [(cols[0] + 0.5) * self.cell, (rows[0] + 0.5) * self.cell]
 
+    def cast_ray(self, x: float, y: float, heading: float, limit: float = math.inf) -> float:
+        """Distance from (x, y) along ``heading`` to the first wall (inf if beyond ``limit``)."""
+        direction = heading_vector(heading)
+        distance = float(ray_grid(self.hwall, self.vwall, self.cell, x, y, *direction, limit))
+        if distance < 0.0:  # outside the grid: test every wall segment
+            distance = float(ray_segments(x, y, *direction, self.segments))
+        return distance if distance <= limit else math.inf
+
     def tile_at(self, x: float, y: float) -> tuple[int, int]:
         """(row, column) of the floor tile under a world point."""
         return int(math.floor(y / self.tile)), int(math.floor(x / self.tile))
@@ -142,6 +158,10 @@ class Block:
         self.polygon = np.empty((4, 2))
         place_polygon(rectangle(self.size, self.size), x, y, rotation, self.polygon)
         self.segments = np.hstack((self.polygon, np.roll(self.polygon, -1, axis=0)))
+
+    def cast_ray(self, x: float, y: float, heading: float) -> float:
+        """Distance from (x, y) along ``heading`` to the block's outline; inf if it misses."""
+        return float(ray_segments(x, y, *heading_vector(heading), self.segments))
 
 
 def robot_outline(settings: Settings) -> FloatArray:

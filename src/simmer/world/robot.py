@@ -15,6 +15,7 @@ class Robot:
         self.outline = outline
         self.start_pose = pose
         self.pose = pose
+        self.turned = 0.0  # degrees turned during the last step (what a gyroscope senses)
         self.height = height
         self.devices: dict[str, Device] = {device.id: device for device in devices}
         self.motors: dict[str, Motor] = {d.id: d for d in devices if isinstance(d, Motor)}

@@ -162,7 +162,7 @@ class Simulation:
             self._step_once()
 
     def run_until_idle(self, max_seconds: float = 600.0) -> bool:
-        """Step until no drive is moving; False if still moving after ``max_seconds`` (simulated)."""
+        """Step until no drive moves; False if one still moves after ``max_seconds`` simulated."""
         limit = self._time + max_seconds
         robot = self._robot
         while robot.any_drive_moving:
@@ -176,6 +176,7 @@ class Simulation:
         dt = self._dt
         dx = dy = rotation = 0.0
         moved = False
+        robot.turned = 0.0
         if self.manual_keys:
             dx, dy, rotation = self._manual_motion(dt)
             moved = True
@@ -226,6 +227,7 @@ class Simulation:
             return
         self._was_blocked = False
         robot.pose = target
+        robot.turned = rotation
 
     # ----------------------------------------------------------------- manual control
 

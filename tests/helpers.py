@@ -1,0 +1,41 @@
+"""Shared helpers for the core tests: small configurations built from the default."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+from simmer import SimConfig, Simulation
+from simmer.config import config_from_dict
+
+REPO = Path(__file__).resolve().parent.parent
+EXAMPLES = REPO / "examples"
+LAB_SEQUENCE = [
+    "w0-36", "r0-90", "w0-36", "r0-90", "w0-12", "r0--90", "w0-24", "r0--90", "w0-6", "r0-720",
+]  # fmt: skip
+
+
+def default_data() -> dict[str, Any]:
+    """The built-in default configuration as plain data (a fresh copy to modify)."""
+    text = files("simmer").joinpath("data/default.toml").read_text(encoding="utf-8")
+    return copy.deepcopy(tomllib.loads(text))
+
+
+def make_config(data: dict[str, Any]) -> SimConfig:
+    """Validate configuration data."""
+    return config_from_dict(data, "<test>", REPO)
+
+
+def make_sim(data: dict[str, Any] | None = None, seed: int | None = None) -> Simulation:
+    """A simulation of ``data`` (default: the built-in default)."""
+    return Simulation(make_config(data if data is not None else default_data()), seed=seed)
+
+
+def run_sequence(sim: Simulation, sequence: list[str]) -> None:
+    """Send each command, check it was accepted, and wait until the drives are idle."""
+    for message in sequence:
+        assert sim.command(message) == [float("inf")], message
+        assert sim.run_until_idle(max_seconds=60)
