@@ -1,0 +1,212 @@
+"""The library a control program uses to talk to SimMeR (or to the robot itself).
+
+>>> from simmer.client import connect
+>>> with connect() as robot:                    # the persistent protocol on 127.0.0.1:61202
+...     robot.drive("w0", 12)                   # +inf: accepted
+...     robot.wait_idle()
+...     print(robot.read("u0"))
+
+``connect(scheme="two-port")`` speaks SimMeR's original scheme (ports 61200/61201) and
+``connect(serial="/dev/pts/3")`` a serial port: the simulator's virtual one or the robot's
+Bluetooth port. The calls are the same whichever you choose.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+from pathlib import Path
+from types import TracebackType
+from typing import Literal, Protocol
+
+from simmer.errors import ConnectionFailed, ReplyTimeout
+from simmer.protocol import FRAME_HEADER, read_frame_header, unpack_replies
+
+STREAM_PORT = 61202
+PORT_RX = 61200
+PORT_TX = 61201
+
+Scheme = Literal["stream", "two-port", "serial"]
+
+
+class Link(Protocol):
+    """What a client needs from a connection: one message in, its reply values out."""
+
+    def exchange(self, message: str) -> list[float]:
+        """Send one message and return its replies."""
+        ...
+
+    def close(self) -> None:
+        """Release the connection."""
+        ...
+
+
+def _recv_exactly(sock: socket.socket, size: int) -> bytes:
+    data = bytearray()
+    while len(data) < size:
+        chunk = sock.recv(size - len(data))
+        if not chunk:
+            raise ConnectionFailed("the simulator closed the connection in the middle of a reply")
+        data += chunk
+    return bytes(data)
+
+
+def _connect_tcp(host: str, port: int, timeout: float) -> socket.socket:
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout)
+    except OSError as exc:
+        raise ConnectionFailed(
+            f"cannot reach SimMeR at {host}:{port} ({exc.strerror or exc}); "
+            "is `simmer run` running?"
+        ) from None
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return sock
+
+
+class StreamLink:
+    """The persistent protocol: one connection, a line per message, a framed reply each."""
+
+    def __init__(self, host: str, port: int, timeout: float) -> None:
+        self.address = f"{host}:{port}"
+        self._sock = _connect_tcp(host, port, timeout)
+
+    def exchange(self, message: str) -> list[float]:
+        """Send ``message`` as one line and read its frame."""
+        try:
+            self._sock.sendall(message.encode() + b"\n")
+            width, count = read_frame_header(_recv_exactly(self._sock, FRAME_HEADER.size))
+            return unpack_replies(_recv_exactly(self._sock, width * count), width)
+        except TimeoutError:
+            raise ReplyTimeout(f"no reply to {message!r} from {self.address}") from None
+        except OSError as exc:
+            raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
+
+    def close(self) -> None:
+        """Close the connection."""
+        self._sock.close()
+
+
+class TwoPortLink:
+    """SimMeR's scheme: send on ``port_rx`` and close, then read the reply from ``port_tx``.
+
+    The reply width (4 or 8 bytes) is inferred from the reply's length."""
+
+    def __init__(self, host: str, port_rx: int, port_tx: int, timeout: float) -> None:
+        self.host, self.port_rx, self.port_tx, self.timeout = host, port_rx, port_tx, timeout
+
+    def exchange(self, message: str) -> list[float]:
+        """One message: connect, send, close; connect, read until closed."""
+        with _connect_tcp(self.host, self.port_rx, self.timeout) as out:
+            out.sendall(message.encode())
+        data = bytearray()
+        with _connect_tcp(self.host, self.port_tx, self.timeout) as back:
+            try:
+                while chunk := back.recv(65536):
+                    data += chunk
+            except TimeoutError:
+                raise ReplyTimeout(f"no reply to {message!r} within {self.timeout} s") from None
+        count = message.count(",") + 1
+        width = len(data) // count if len(data) in (4 * count, 8 * count) else 4
+        if not data or len(data) % width:
+            raise ConnectionFailed(f"reply of {len(data)} bytes to {message!r} is incomplete")
+        return unpack_replies(bytes(data), width)
+
+    def close(self) -> None:
+        """Nothing stays open between messages."""
+
+
+class SerialLink:
+    """A serial port (pyserial): a line per message, one packed float per command back."""
+
+    def __init__(self, port: str, baudrate: int, timeout: float, width: int) -> None:
+        import serial  # pyserial
+
+        self.width = width
+        try:
+            self._port = serial.Serial(port, baudrate=baudrate, timeout=timeout)
+        except (serial.SerialException, OSError) as exc:
+            raise ConnectionFailed(f"cannot open serial port {port}: {exc}") from None
+
+    def exchange(self, message: str) -> list[float]:
+        """Write the message and a newline, read one value per command."""
+        size = self.width * (message.count(",") + 1)
+        self._port.write(message.encode() + b"\n")
+        data = self._port.read(size)
+        if len(data) < size:
+            raise ReplyTimeout(f"serial reply to {message!r}: {len(data)} of {size} bytes")
+        return unpack_replies(data, self.width)
+
+    def close(self) -> None:
+        """Close the port."""
+        self._port.close()
+
+
+class Client:
+    """A connection to the simulator or robot; use :func:`connect` to make one."""
+
+    def __init__(self, link: Link) -> None:
+        self.link = link
+
+    def send(self, message: str) -> list[float]:
+        """Send a message such as ``"u0,u1"``; one value per command (NaN: rejected/invalid)."""
+        return self.link.exchange(message)
+
+    def drive(self, drive_id: str, amount: float) -> float:
+        """Start drive ``drive_id`` moving ``amount`` in (or deg): +inf accepted, NaN busy."""
+        return self.send(f"{drive_id}-{amount:g}")[0]
+
+    def read(self, device_id: str) -> float:
+        """Read one sensor (or motor odometer)."""
+        return self.send(device_id)[0]
+
+    def wait_idle(self, drive_id: str = "w0", poll: float = 0.01, timeout: float = 600.0) -> None:
+        """Wait until no drive is moving (a zero-length move of ``drive_id`` is accepted)."""
+        deadline = time.monotonic() + timeout
+        while not math.isinf(self.drive(drive_id, 0)):
+            if time.monotonic() > deadline:
+                raise ReplyTimeout(f"drives still moving after {timeout} s")
+            time.sleep(poll)
+
+    def close(self) -> None:
+        """Close the connection."""
+        self.link.close()
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+def connect(
+    host: str = "127.0.0.1",
+    port: int = STREAM_PORT,
+    *,
+    scheme: Scheme | None = None,
+    port_rx: int = PORT_RX,
+    port_tx: int = PORT_TX,
+    serial: str | Path | None = None,
+    baudrate: int = 9600,
+    width: int = 4,
+    timeout: float = 30.0,
+) -> Client:
+    """Connect with the persistent protocol (default), ``scheme="two-port"``, or ``serial=PATH``.
+
+    ``width`` is the serial reply width (4 for the Arduino and SimMeR's default); TCP replies
+    say or reveal their own width. Raises :class:`~simmer.errors.ConnectionFailed`.
+    """
+    if scheme is None:
+        scheme = "serial" if serial is not None else "stream"
+    link: Link
+    if scheme == "serial":
+        if serial is None:
+            raise ValueError("scheme='serial' needs serial=PATH")
+        link = SerialLink(str(serial), baudrate, timeout, width)
+    elif scheme == "two-port":
+        link = TwoPortLink(host, port_rx, port_tx, timeout)
+    else:
+        link = StreamLink(host, port, timeout)
+    return Client(link)

@@ -1,0 +1,145 @@
+"""The simulation loop: the one thread that owns a :class:`~simmer.world.Simulation`.
+
+It steps the simulation at ``speed`` times real time (``None``: as fast as it can), answers
+every message on its :class:`~simmer.transport.CommandBus` as soon as it arrives (it waits on
+the bus, not on a sleep, until the next step is due: a read is an instant snapshot, a drive
+starts at the next step), and calls ``on_frame`` at most ~60 times per wall-clock second so a
+window can draw and read the keyboard in the same thread.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from simmer.transport.bus import CommandBus, Request
+from simmer.world import Simulation
+
+log = logging.getLogger("simmer.runner")
+
+FRAME_INTERVAL = 1.0 / 60.0
+"""Wall-clock seconds between ``on_frame`` calls (at most)."""
+MAX_LAG = 0.25
+"""If stepping falls this many wall seconds behind, drop the backlog instead of racing."""
+MAX_WAIT = 0.05
+"""Longest single wait, so a stop request is noticed promptly."""
+
+FrameCallback = Callable[["Runner"], bool]
+
+
+@dataclass(frozen=True)
+class Exchange:
+    """One answered message, for the HUD: when, from whom, what was asked and answered."""
+
+    time: float
+    client: str
+    message: str
+    replies: tuple[float, ...]
+
+
+class Runner:
+    """Drive a simulation in real time (or faster) and serve the bus; see the module doc."""
+
+    def __init__(
+        self,
+        sim: Simulation,
+        *,
+        speed: float | None = 1.0,
+        bus: CommandBus | None = None,
+        history: int = 20,
+    ) -> None:
+        self.sim = sim
+        self.bus = bus if bus is not None else CommandBus()
+        self.paused = False
+        self.history: deque[Exchange] = deque(maxlen=history)
+        self._speed: float | None = None
+        self._reschedule = True
+        self.speed = speed
+
+    @property
+    def speed(self) -> float | None:
+        """Multiple of real time (``None``: as fast as possible). Settable while running."""
+        return self._speed
+
+    @speed.setter
+    def speed(self, value: float | None) -> None:
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ValueError(f"speed must be a positive number or None (max), not {value!r}")
+        self._speed = value
+        self._reschedule = True
+
+    @property
+    def clients(self) -> list[str]:
+        """Clients connected right now (from the bus)."""
+        return self.bus.clients
+
+    def step_once(self) -> None:
+        """Advance one step (e.g. the window's single-step key while paused)."""
+        self.sim.step()
+
+    def handle(self, request: Request) -> list[float]:
+        """Execute one request on the simulation and fulfil its future."""
+        decoded = request.decoded
+        if decoded.text is None:
+            log.warning("bad message from %s: %s", request.client, decoded.error)
+            replies = [math.nan] * decoded.count
+            message = f"<{decoded.error}>"
+        else:
+            replies = self.sim.command(decoded.text)
+            message = decoded.text
+        self.history.append(Exchange(self.sim.time, request.client, message, tuple(replies)))
+        request.future.set_result(replies)
+        return replies
+
+    def serve(self, timeout: float = 0.0) -> int:
+        """Answer every queued request, waiting up to ``timeout`` s for the first; how many."""
+        request = self.bus.get(timeout)
+        served = 0
+        while request is not None:
+            self.handle(request)
+            served += 1
+            request = self.bus.get(0)
+        return served
+
+    def run(
+        self,
+        on_frame: FrameCallback | None = None,
+        stop_event: threading.Event | None = None,
+        until: float | None = None,
+    ) -> None:
+        """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``."""
+        sim = self.sim
+        bus = self.bus
+        next_step = next_frame = time.monotonic()
+        while not (stop_event is not None and stop_event.is_set()):
+            if until is not None and sim.time >= until - 1e-9:
+                break
+            now = time.monotonic()
+            if on_frame is not None and now >= next_frame:
+                if not on_frame(self):
+                    break
+                next_frame = max(next_frame + FRAME_INTERVAL, now)
+                now = time.monotonic()
+            wake = next_frame if on_frame is not None else math.inf
+            if self._reschedule:
+                self._reschedule = False
+                next_step = now
+            speed = self._speed
+            if self.paused:
+                self.serve(min(wake - now, MAX_WAIT))
+                next_step = time.monotonic()
+            elif speed is None or now >= next_step:
+                if bus.pending():
+                    self.serve()
+                sim.step()
+                if speed is not None:
+                    next_step += sim.dt / speed
+                    if now - next_step > MAX_LAG:
+                        next_step = now
+            else:
+                self.serve(min(next_step - now, wake - now, MAX_WAIT))

@@ -1,0 +1,20 @@
+"""How control programs reach the simulation: SimMeR's two-port TCP scheme, the persistent
+stream protocol and a virtual serial port. Transports only read, decode and queue; the loop
+(:mod:`simmer.runner`) owns the simulation. :class:`Link` starts the ones asked for."""
+
+from simmer.transport.bus import BusClosed, CommandBus, Request
+from simmer.transport.link import Link, is_loopback
+from simmer.transport.serial_pty import SerialServer
+from simmer.transport.tcp import STREAM_PORT, StreamServer, TwoPortServer
+
+__all__ = [
+    "STREAM_PORT",
+    "BusClosed",
+    "CommandBus",
+    "Link",
+    "Request",
+    "SerialServer",
+    "StreamServer",
+    "TwoPortServer",
+    "is_loopback",
+]

@@ -1,0 +1,100 @@
+"""Start every transport a run serves, from the configuration plus command-line overrides."""
+
+from __future__ import annotations
+
+import ipaddress
+import logging
+from pathlib import Path
+
+from simmer.config.models import Settings
+from simmer.transport.bus import CommandBus
+from simmer.transport.serial_pty import SerialServer
+from simmer.transport.tcp import STREAM_PORT, StreamServer, TwoPortServer
+
+log = logging.getLogger("simmer.transport")
+
+
+def is_loopback(host: str) -> bool:
+    """True for 127.x.x.x, ::1 and ``localhost``."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+class Link:
+    """The two-port server, the stream server and (optionally) the virtual serial port."""
+
+    def __init__(
+        self,
+        bus: CommandBus,
+        settings: Settings,
+        *,
+        host: str | None = None,
+        port_rx: int | None = None,
+        port_tx: int | None = None,
+        stream_port: int = STREAM_PORT,
+        serial: bool = False,
+        serial_link: str | Path | None = None,
+    ) -> None:
+        self.host = host if host is not None else settings.host
+        if not is_loopback(self.host):
+            log.warning(
+                "listening on %s: any machine that can reach it can drive the robot", self.host
+            )
+        width, encoding, timeout = settings.reply_bytes, settings.str_encoding, settings.timeout
+        self.two_port = TwoPortServer(
+            bus,
+            self.host,
+            settings.port_rx if port_rx is None else port_rx,
+            settings.port_tx if port_tx is None else port_tx,
+            width=width,
+            encoding=encoding,
+            timeout=timeout,
+        )
+        self.serial: SerialServer | None = None
+        try:
+            self.stream = StreamServer(
+                bus, self.host, stream_port, width=width, encoding=encoding, timeout=timeout
+            )
+            if serial or serial_link is not None:
+                self.serial = SerialServer(
+                    bus, serial_link, width=width, encoding=encoding, timeout=timeout
+                )
+        except OSError:
+            self.close()
+            raise
+
+    def start(self) -> None:
+        """Start serving on every transport."""
+        self.two_port.start()
+        self.stream.start()
+        if self.serial is not None:
+            self.serial.start()
+
+    def describe(self) -> list[str]:
+        """One line per transport: where a control program connects."""
+        lines = [
+            f"SimMeR two-port TCP: {self.host} rx {self.two_port.port_rx}, "
+            f"tx {self.two_port.port_tx}",
+            f"persistent TCP:      {self.host} port {self.stream.port}",
+        ]
+        if self.serial is not None:
+            link = f" (link {self.serial.link})" if self.serial.link else ""
+            lines.append(f"virtual serial port: {self.serial.path}{link}")
+        return lines
+
+    def close(self) -> None:
+        """Stop every transport."""
+        for server in (self.two_port, getattr(self, "stream", None), self.serial):
+            if server is not None:
+                server.close()
+
+    def __enter__(self) -> Link:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
