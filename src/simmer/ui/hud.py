@@ -1,0 +1,204 @@
+"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import deque
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+from simmer.geometry import FloatArray, Pose
+from simmer.ui.render import Color, Renderer
+from simmer.ui.scene import PANEL_HEIGHT, tint
+from simmer.world import Simulation
+from simmer.world.events import CommandEvent, Event, ResetEvent, StepEvent
+
+log = logging.getLogger("simmer.ui")
+
+REACH_DISTANCE = 1.0
+"""The robot "reaches" the block when its outline comes within this many inches of it."""
+KEY_LAYOUT = (("q", "w", "e"), ("a", "s", "d"))
+TEXT: Color = (235, 240, 240)
+DIM: Color = (150, 175, 175)
+LIT: Color = (255, 210, 0)
+UNLIT: Color = (60, 70, 70)
+
+HELP = (
+    ("W / S", "drive forward / backward (6 in/s)"),
+    ("A / D", "turn anticlockwise / clockwise (120 deg/s)"),
+    ("Q / E", "slide sideways toward robot +x / -x"),
+    ("Space", "pause / resume"),
+    (".", "one step while paused"),
+    ("+ / -", "faster / slower (simulation speed)"),
+    ("R", "reset robot, block, sensors and stopwatch"),
+    ("left-drag", "move the robot (refused onto a wall)"),
+    ("right-drag", "turn the robot"),
+    ("H", "show / hide this help"),
+    ("Esc", "quit (or close the window)"),
+)
+
+
+def polygon_gap(a: FloatArray, b: FloatArray) -> float:
+    """Smallest distance between the outlines of two polygons (0 if their edges cross)."""
+    best = math.inf
+    for points, poly in ((a, b), (b, a)):
+        starts = poly
+        ends = np.roll(poly, -1, axis=0)
+        edge = ends - starts
+        length2 = np.maximum((edge**2).sum(axis=1), 1e-12)
+        for p in points:
+            t = np.clip(((p - starts) * edge).sum(axis=1) / length2, 0.0, 1.0)
+            nearest = starts + t[:, None] * edge
+            best = min(best, float(np.sqrt(((p - nearest) ** 2).sum(axis=1)).min()))
+    return best
+
+
+class Stopwatch:
+    """The lab's Task 2 timer, in simulated seconds, fed by the simulation's events.
+
+    It starts at the first step in which the robot moves and stops when the robot's outline
+    comes within :data:`REACH_DISTANCE` of the block; the result is logged. A reset of the
+    simulation resets it.
+    """
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        self.start: float | None = None
+        self.stop: float | None = None
+        self._last_pose: Pose = sim.robot.pose
+        robot_radius = float(np.sqrt((sim.robot.outline**2).sum(axis=1)).max())
+        self._near = robot_radius + sim.block.size * math.sqrt(0.5) + REACH_DISTANCE
+
+    def reset(self) -> None:
+        """Clear the timer; the next motion starts it again."""
+        self.start = self.stop = None
+        self._last_pose = self.sim.robot.pose
+
+    def __call__(self, event: Event) -> None:
+        """Observe one simulation event."""
+        if isinstance(event, ResetEvent):
+            self.reset()
+        elif isinstance(event, StepEvent) and self.stop is None:
+            if self.start is None:
+                if event.pose == self._last_pose:
+                    return
+                self.start = event.time - self.sim.dt
+            if self.reached():
+                self.stop = event.time
+                log.info("Task 2 stopwatch: reached the block in %.2f s", self.stop - self.start)
+
+    def reached(self) -> bool:
+        """True if the robot's outline is within :data:`REACH_DISTANCE` of the block."""
+        sim = self.sim
+        pose = sim.robot.pose
+        if math.hypot(pose.x - sim.block.x, pose.y - sim.block.y) > self._near:
+            return False
+        return polygon_gap(sim.robot.polygon(), sim.block.polygon) <= REACH_DISTANCE
+
+    def elapsed(self) -> float | None:
+        """Seconds on the clock (frozen once stopped), or None before the first motion."""
+        if self.start is None:
+            return None
+        end = self.stop if self.stop is not None else self.sim.time
+        return end - self.start
+
+
+class CommandLog:
+    """The last few messages and their replies, collected from the simulation's events."""
+
+    def __init__(self, size: int = 5) -> None:
+        self.entries: deque[CommandEvent] = deque(maxlen=size)
+
+    def __call__(self, event: Event) -> None:
+        """Observe one simulation event."""
+        if isinstance(event, CommandEvent):
+            self.entries.append(event)
+
+
+def _reply(value: float) -> str:
+    if math.isnan(value):
+        return "NaN"
+    if math.isinf(value):
+        return "ok" if value > 0 else "-inf"
+    return f"{value:.4g}"
+
+
+def speed_text(speed: float | None) -> str:
+    """``x1``, ``x0.5``, ``max``."""
+    return "max" if speed is None else f"x{speed:g}"
+
+
+def paint_hud(
+    r: Renderer,
+    sim: Simulation,
+    *,
+    held: Iterable[str],
+    paused: bool,
+    speed: float | None,
+    stopwatch: Stopwatch,
+    commands: Sequence[CommandEvent],
+    clients: Sequence[str] | None,
+) -> None:
+    """The panel above the maze; everything in simulated time."""
+    # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
+    fade = sim.time % 1.0
+    r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), fade, UNLIT))
+    held = set(held)
+    for row, keys in enumerate(KEY_LAYOUT):
+        for col, key in enumerate(keys):
+            x, y = 52 + col * 30, 12 + row * 30
+            on = key in held
+            r.draw_rect((x, y, 26, 26), LIT if on else UNLIT)
+            r.draw_text(key.upper(), (x + 8, y + 6), (0, 0, 0) if on else TEXT, 20)
+    r.draw_text("h: help", (12, 78), DIM, 20)
+
+    x = 160
+    state = "PAUSED (Space resumes, . steps)" if paused else "running"
+    r.draw_text(f"time {sim.time:8.2f} s   speed {speed_text(speed)}   {state}", (x, 10), TEXT, 22)
+    elapsed = stopwatch.elapsed()
+    if elapsed is None:
+        watch = "Task 2 stopwatch: starts when the robot first moves"
+    elif stopwatch.stop is None:
+        watch = f"Task 2 stopwatch: {elapsed:.2f} s"
+    else:
+        watch = f"Task 2 stopwatch: reached the block in {elapsed:.2f} s"
+    r.draw_text(watch, (x, 36), LIT if stopwatch.stop is not None else TEXT, 22)
+    pose = sim.robot.pose
+    r.draw_text(
+        f"true pose  x {pose.x:6.2f} in   y {pose.y:6.2f} in   heading {pose.heading:6.1f} deg",
+        (x, 62),
+        TEXT,
+        22,
+    )
+    r.draw_text(f"collisions {sim.collisions}", (x, 88), TEXT, 22)
+
+    x = 640
+    r.draw_text("last commands -> replies", (x, 10), DIM, 20)
+    for i, event in enumerate(reversed(commands)):
+        replies = ", ".join(_reply(v) for v in event.replies)
+        line = f"{event.time:7.2f} s  {event.message[:28]} -> {replies[:40]}"
+        r.draw_text(line, (x, 30 + 16 * i), TEXT, 18)
+
+    if clients is not None:
+        x = 1140
+        r.draw_text("connected clients", (x, 10), DIM, 20)
+        for i, client in enumerate(clients[:5]):
+            r.draw_text(client, (x, 30 + 16 * i), TEXT, 18)
+        if not clients:
+            r.draw_text("none", (x, 30), TEXT, 18)
+
+
+def paint_help(r: Renderer, size: tuple[int, int]) -> None:
+    """The key list, in a box over the maze."""
+    width, height = 560, 44 + 26 * len(HELP)
+    x0 = max(0, (size[0] - width) // 2)
+    y0 = max(PANEL_HEIGHT, (size[1] - height) // 2)
+    r.draw_rect((x0, y0, width, height), (20, 30, 30))
+    r.draw_rect((x0, y0, width, height), LIT, 2)
+    r.draw_text("Keys and mouse", (x0 + 16, y0 + 12), LIT, 24)
+    for i, (key, what) in enumerate(HELP):
+        y = y0 + 42 + 26 * i
+        r.draw_text(key, (x0 + 16, y), LIT, 22)
+        r.draw_text(what, (x0 + 140, y), TEXT, 22)

@@ -1,0 +1,192 @@
+"""Painting the world: inches become pixels here, never in the model (DESIGN §1).
+
+The static layer (background, floor tiles, walls, inch rulers) is painted once per window size;
+the dynamic layer (block, robot, device outlines, sensor measurements) every frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from simmer.devices.base import Circle, Segment
+from simmer.geometry import FloatArray, heading_vector, place_polygon
+from simmer.ui.render import Color, Point, Renderer
+from simmer.world import Simulation
+
+PANEL_HEIGHT = 112
+"""Pixels above the maze reserved for the heads-up display."""
+WHITE_TILE: Color = (235, 235, 235)
+BLACK_TILE: Color = (30, 30, 30)
+GHOST_COLOR: Color = (255, 90, 90)
+RULER_COLOR: Color = (220, 235, 235)
+
+
+@dataclass(frozen=True)
+class View:
+    """Where the maze sits in the window: pixels per inch and the pixel of the maze origin."""
+
+    ppi: float
+    ox: float
+    oy: float
+
+    @classmethod
+    def fit(cls, sim: Simulation, size: tuple[int, int]) -> View:
+        """The largest view of the maze (plus border) that fits under the HUD panel."""
+        settings = sim.config.settings
+        base_w, base_h = base_scene_size(sim)
+        avail_h = max(1, size[1] - PANEL_HEIGHT)
+        scale = min(size[0] / base_w, avail_h / base_h)
+        border = settings.border_pixels * scale
+        ox = (size[0] - base_w * scale) / 2 + border
+        oy = PANEL_HEIGHT + (avail_h - base_h * scale) / 2 + border
+        return cls(settings.ppi * scale, ox, oy)
+
+    def point(self, x: float, y: float) -> Point:
+        """The pixel of a world point (inches)."""
+        return (self.ox + x * self.ppi, self.oy + y * self.ppi)
+
+    def points(self, polygon: FloatArray) -> list[Point]:
+        """The pixels of a (K, 2) world polygon."""
+        ppi, ox, oy = self.ppi, self.ox, self.oy
+        return [(ox + x * ppi, oy + y * ppi) for x, y in polygon.tolist()]
+
+    def to_world(self, px: float, py: float) -> tuple[float, float]:
+        """The world point (inches) under a pixel."""
+        return ((px - self.ox) / self.ppi, (py - self.oy) / self.ppi)
+
+    def width(self, inches: float) -> int:
+        """A line thickness in whole pixels (at least one)."""
+        return max(1, round(inches * self.ppi))
+
+
+def base_scene_size(sim: Simulation) -> tuple[float, float]:
+    """Maze plus border at the configured ``ppi``, in pixels (without the HUD panel)."""
+    settings = sim.config.settings
+    border = 2 * settings.border_pixels
+    return (sim.maze.width * settings.ppi + border, sim.maze.height * settings.ppi + border)
+
+
+def default_window_size(sim: Simulation) -> tuple[int, int]:
+    """The window size at the configured ``ppi`` (1576 × 920 for the default maze)."""
+    width, height = base_scene_size(sim)
+    return (math.ceil(width), math.ceil(height) + PANEL_HEIGHT)
+
+
+def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
+    """``color`` moved ``amount`` (0..1) of the way toward ``toward``."""
+    r, g, b = (round(c + (t - c) * amount) for c, t in zip(color, toward, strict=True))
+    return (r, g, b)
+
+
+class ScenePainter:
+    """Draws one simulation's maze, block, robot and sensors with any :class:`Renderer`."""
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        settings = sim.config.settings
+        self.settings = settings
+        self.robot_fill = tint(settings.robot_color, 0.75)
+        self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
+        self._scratch: dict[str, FloatArray] = {}
+
+    # ----------------------------------------------------------------- static layer
+
+    def paint_static(self, r: Renderer, view: View, size: tuple[int, int]) -> None:
+        """Background, HUD panel, floor tiles, solid cells, walls and inch rulers."""
+        settings = self.settings
+        maze = self.sim.maze
+        r.fill(settings.background_color)
+        r.draw_rect((0, 0, size[0], PANEL_HEIGHT), tint(settings.background_color, 0.6, (0, 0, 0)))
+        tile = maze.tile
+        rows, cols = maze.floor_white.shape
+        xs = [round(view.ox + min(c * tile, maze.width) * view.ppi) for c in range(cols + 1)]
+        ys = [round(view.oy + min(r_ * tile, maze.height) * view.ppi) for r_ in range(rows + 1)]
+        for row in range(rows):
+            for col in range(cols):
+                color = WHITE_TILE if maze.floor_white[row, col] else BLACK_TILE
+                r.draw_rect((xs[col], ys[row], xs[col + 1] - xs[col], ys[row + 1] - ys[row]), color)
+        cell = maze.cell
+        for row, col in zip(*np.nonzero(maze.solid), strict=True):
+            x0, y0 = view.point(col * cell, row * cell)
+            x1, y1 = view.point((col + 1) * cell, (row + 1) * cell)
+            r.draw_rect(
+                (round(x0), round(y0), round(x1) - round(x0), round(y1) - round(y0)),
+                self.solid_color,
+            )
+        half = settings.wall_thickness / 2
+        for x1, y1, x2, y2 in maze.segments.tolist():
+            a = view.point(min(x1, x2) - half, min(y1, y2) - half)
+            b = view.point(max(x1, x2) + half, max(y1, y2) + half)
+            r.draw_rect((a[0], a[1], b[0] - a[0], b[1] - a[1]), settings.wall_color)
+        self._paint_rulers(r, view)
+
+    def _paint_rulers(self, r: Renderer, view: View) -> None:
+        """Inch marks every cell along the top and left borders, if there is room."""
+        border = view.ox - 2
+        size = min(16, int(border))
+        if size < 10:
+            return
+        maze = self.sim.maze
+        for c in range(maze.cols + 1):
+            x, y = view.point(c * maze.cell, 0)
+            r.draw_text(f"{c * maze.cell:g}", (x + 2, y - size), RULER_COLOR, size)
+        for row in range(1, maze.rows + 1):
+            x, y = view.point(0, row * maze.cell)
+            r.draw_text(f"{row * maze.cell:g}", (x - border, y - size), RULER_COLOR, size)
+
+    # ----------------------------------------------------------------- dynamic layer
+
+    def paint_dynamic(self, r: Renderer, view: View, ghost: FloatArray | None = None) -> None:
+        """Block, robot (with a heading mark), visible devices, measurements, drag ghost."""
+        sim = self.sim
+        settings = self.settings
+        block = sim.block
+        block_px = view.points(block.polygon)
+        r.draw_polygon(block_px, settings.block_color)
+        r.draw_polygon(
+            block_px,
+            tint(settings.block_color, 0.5, (0, 0, 0)),
+            view.width(settings.block_thickness),
+        )
+        robot = sim.robot
+        pose = robot.pose
+        body = self._placed("", robot.outline, pose.x, pose.y, pose.heading)
+        body_px = view.points(body)
+        r.draw_polygon(body_px, self.robot_fill)
+        r.draw_polygon(body_px, settings.robot_color, view.width(settings.robot_thickness))
+        reach = 0.45 * float(np.min(np.abs(robot.outline).max(axis=0)))
+        forward = heading_vector(pose.heading)
+        r.draw_segment(
+            view.point(pose.x, pose.y),
+            view.point(pose.x + forward.x * reach, pose.y + forward.y * reach),
+            settings.robot_color,
+            view.width(settings.robot_thickness),
+        )
+        for device in robot.devices.values():
+            if device.visible:
+                dpose = device.world_pose(pose)
+                outline = self._placed(device.id, device.outline, dpose.x, dpose.y, dpose.heading)
+                r.draw_polygon(view.points(outline), device.params.color, 2)
+        for device in robot.devices.values():
+            for shape in device.shapes(sim):
+                if isinstance(shape, Segment):
+                    r.draw_segment(view.point(*shape.start), view.point(*shape.end), shape.color)
+                elif isinstance(shape, Circle):
+                    r.draw_circle(
+                        view.point(*shape.center), shape.radius * view.ppi, shape.color, 2
+                    )
+        if ghost is not None:
+            r.draw_polygon(view.points(ghost), GHOST_COLOR, 2)
+
+    def _placed(
+        self, key: str, local: FloatArray, x: float, y: float, heading: float
+    ) -> FloatArray:
+        """``local`` placed at a pose, in a reused scratch array (no per-frame allocation)."""
+        out = self._scratch.get(key)
+        if out is None or out.shape != local.shape:
+            out = self._scratch[key] = np.empty_like(local)
+        place_polygon(local, x, y, heading, out)
+        return out
