@@ -1,0 +1,190 @@
+"""Core simulation benchmark: steps per second, sensor read cost, maze-size scaling, memory.
+
+Run ``python benchmarks/bench_core.py`` (or ``python benchmarks/run.py`` for every benchmark).
+Figures are wall-clock on this machine; each is the best of several repeats, after a warm-up
+that also compiles (or loads from cache) the Numba kernels.
+"""
+
+from __future__ import annotations
+
+import copy
+import resource
+import time
+import tomllib
+import tracemalloc
+from collections.abc import Callable
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from simmer import Simulation
+from simmer.config import config_from_dict
+
+REPEATS = 5
+TARGETS = {
+    "ultrasonic_us": 15.0,
+    "all_sensors_steps": 15_000.0,
+    "no_sensor_steps": 50_000.0,
+    "big_maze_ratio": 2.0,
+    "memory_mb": 80.0,
+}
+
+
+def lab_data(extra_sensors: bool = True) -> dict[str, Any]:
+    """The built-in lab rover, plus a gyroscope, compass and infrared sensor."""
+    text = files("simmer").joinpath("data/default.toml").read_text(encoding="utf-8")
+    data = copy.deepcopy(tomllib.loads(text))
+    data["simulate_list"] = []
+    for sensor in ("u0", "u1", "u2", "u3"):
+        data["sensors"][sensor]["error"] = 0.02
+    if extra_sensors:
+        data["sensors"] |= {
+            "g0": {"type": "gyroscope"},
+            "c0": {"type": "compass"},
+            "i0": {"type": "infrared", "position": [0, 1.5]},
+        }
+    return data
+
+
+def big_maze_data(rows: int = 40, cols: int = 80, seed: int = 1) -> dict[str, Any]:
+    """A 40 x 80-cell maze: random solid cells (25 %), the start cell and its column open."""
+    rng = np.random.default_rng(seed)
+    walls = (rng.random((rows, cols)) > 0.25).astype(int)
+    walls[:, 0] = 1
+    walls[0, :] = 1
+    data = lab_data()
+    data["walls"] = walls.tolist()
+    data["block_position"] = [cols * 12 - 6, 6]
+    return data
+
+
+def best_rate(run: Callable[[int], None], count: int) -> float:
+    """Best operations per second of ``run(count)`` over the repeats."""
+    best = float("inf")
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        run(count)
+        best = min(best, time.perf_counter() - start)
+    return count / best
+
+
+def drive_forever(sim: Simulation) -> Callable[[], None]:
+    """A callable that keeps the robot moving back and forth (so every step does real work)."""
+    moves = iter([])
+
+    def keep_moving() -> None:
+        nonlocal moves
+        if not sim.robot.any_drive_moving:
+            message = next(moves, None)
+            if message is None:
+                moves = iter(["w0-20", "r0-180", "w0-20", "r0-180"])
+                message = next(moves)
+            sim.command(message)
+
+    return keep_moving
+
+
+def steps_per_second(data: dict[str, Any], sample: str | None) -> float:
+    sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
+    keep_moving = drive_forever(sim)
+
+    def run(count: int) -> None:
+        for _ in range(count):
+            keep_moving()
+            sim.step()
+            if sample:
+                sim.command(sample)
+
+    run(200)
+    return best_rate(run, 6000)
+
+
+def read_microseconds(data: dict[str, Any], device_id: str, pose: tuple[float, float]) -> float:
+    """Mean µs per ``simulate`` call, over 8 headings."""
+    sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
+    device = sim.robot.devices[device_id]
+    rates = []
+    for heading in range(0, 360, 45):
+        assert sim.place_robot(pose[0], pose[1], float(heading)), "robot does not fit"
+
+        def run(count: int) -> None:
+            for _ in range(count):
+                device.simulate(0.0, sim)
+
+        run(100)
+        rates.append(best_rate(run, 5000))
+    return 1e6 / float(np.mean(rates))
+
+
+def command_microseconds(data: dict[str, Any], message: str) -> float:
+    sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
+
+    def run(count: int) -> None:
+        for _ in range(count):
+            sim.command(message)
+
+    run(100)
+    return 1e6 / best_rate(run, 5000)
+
+
+def memory() -> tuple[float, float]:
+    """(peak RSS of this process in MB, peak Python allocations of building + running in MB)."""
+    tracemalloc.start()
+    sim = Simulation(config_from_dict(lab_data(), "<bench>", Path.cwd()))
+    keep_moving = drive_forever(sim)
+    for _ in range(2000):
+        keep_moving()
+        sim.step()
+        sim.command("u0,u1,u2,u3,g0,c0,i0")
+    _, traced_peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return rss_mb, traced_peak / 2**20
+
+
+def main() -> dict[str, float]:
+    """Run the core benchmark, print a table of figures against targets, return the figures."""
+    every = "u0,u1,u2,u3,g0,c0,i0"
+    lab, big = lab_data(), big_maze_data()
+    figures = {
+        "all_sensors_steps": steps_per_second(lab, every),
+        "no_sensor_steps": steps_per_second(lab, None),
+        "ultrasonic_us": read_microseconds(lab, "u0", (6.0, 42.0)),
+        "infrared_us": read_microseconds(lab, "i0", (6.0, 42.0)),
+        "ultrasonic_command_us": command_microseconds(lab, "u0"),
+        "big_ultrasonic_us": read_microseconds(big, "u0", (6.0, 6.0)),
+        "big_infrared_us": read_microseconds(big, "i0", (6.0, 6.0)),
+        "big_all_sensors_steps": steps_per_second(big, every),
+    }
+    figures["big_maze_ratio"] = figures["big_ultrasonic_us"] / figures["ultrasonic_us"]
+    figures["memory_mb"], figures["traced_mb"] = memory()
+    rows = [
+        ("steps/s, lab rover + gyro, compass, IR, all sampled each step", "all_sensors_steps",
+         ">=", "15,000 (original: 683)"),
+        ("steps/s, no sensor sampled (robot driving)", "no_sensor_steps", ">=", "50,000"),
+        ("µs per ultrasonic read", "ultrasonic_us", "<=", "15 (original: 280)"),
+        ("µs per infrared read", "infrared_us", "", "(original: 43)"),
+        ("µs per 'u0' command (parse + read)", "ultrasonic_command_us", "", ""),
+        ("µs per ultrasonic read, 40 x 80 maze", "big_ultrasonic_us", "", ""),
+        ("µs per infrared read, 40 x 80 maze", "big_infrared_us", "", ""),
+        ("steps/s all sampled, 40 x 80 maze", "big_all_sensors_steps", "", ""),
+        ("ultrasonic read ratio, 40 x 80 / default", "big_maze_ratio", "<=", "2"),
+        ("peak RSS of the process, MB (Numba/LLVM included)", "memory_mb", "<=", "80"),
+        ("peak Python allocations of a 2,000-step run, MB", "traced_mb", "", ""),
+    ]  # fmt: skip
+    print("SimMeR core benchmark")
+    for label, key, sense, target in rows:
+        value = figures[key]
+        verdict = ""
+        if key in TARGETS:
+            ok = value >= TARGETS[key] if sense == ">=" else value <= TARGETS[key]
+            verdict = "meets" if ok else "MISSES"
+        shown = f"{value:,.0f}" if value >= 100 else f"{value:.2f}"
+        print(f"  {label:<58} {shown:>10}   target {sense} {target:<24} {verdict}")
+    return figures
+
+
+if __name__ == "__main__":
+    main()
