@@ -133,3 +133,10 @@ def test_user_devices_share_the_seeded_generator(tmp_path: Path) -> None:
     again = Simulation(make_config(data), seed=3).command("n0,n0")
     assert first == again
     assert not math.isnan(first[0])
+
+
+def test_configuration_reference_is_up_to_date() -> None:
+    from simmer.config.reference import reference_markdown
+
+    committed = (REPO / "docs" / "configuration.md").read_text(encoding="utf-8")
+    assert committed == reference_markdown(), "run: simmer keys --markdown > docs/configuration.md"

@@ -54,6 +54,22 @@ def check(
 
 
 @app.command()
+def keys(
+    markdown: Annotated[bool, typer.Option(help="Print the reference as Markdown.")] = False,
+) -> None:
+    """List every configuration key and device setting, with defaults."""
+    from simmer.config.reference import reference_markdown
+
+    text = reference_markdown()
+    if markdown:
+        print(text, end="")
+    else:
+        from rich.markdown import Markdown
+
+        out.print(Markdown(text))
+
+
+@app.command()
 def run(
     config: ConfigArg = None,
     headless: Annotated[bool, typer.Option(help="Run without a window.")] = True,

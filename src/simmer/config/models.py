@@ -55,39 +55,47 @@ class Settings(BaseModel):
         (), description="Python files or modules that register device kinds of your own."
     )
     # Network
-    host: str = "127.0.0.1"
-    port_rx: int = Field(61200, ge=1, le=65535)
-    port_tx: int = Field(61201, ge=1, le=65535)
-    timeout: float = Field(300.0, gt=0)
-    str_encoding: str = "utf-8"
+    host: str = Field("127.0.0.1", description="Address to listen on (this machine only).")
+    port_rx: int = Field(61200, ge=1, le=65535, description="SimMeR TCP: commands arrive here.")
+    port_tx: int = Field(61201, ge=1, le=65535, description="SimMeR TCP: replies leave here.")
+    timeout: float = Field(300.0, gt=0, description="Socket timeout in seconds.")
+    str_encoding: str = Field("utf-8", description="Text encoding of commands.")
     # Block
-    block_position: Point = (66.0, 5.0)
-    block_rotation: float = 0.0
-    block_size: float = Field(3.0, gt=0)
+    block_position: Point = Field((66.0, 5.0), description="Block centre [x, y], inches.")
+    block_rotation: float = Field(0.0, description="Block rotation, degrees from +y.")
+    block_size: float = Field(3.0, gt=0, description="Block side and height, inches.")
     # Robot
-    robot_start_position: Point = (6.0, 42.0)
-    robot_start_rotation: float = 180.0
-    robot_width: float = Field(6.0, gt=0)
-    robot_height: float = Field(6.0, gt=0)
-    robot_outline: tuple[Point, ...] | None = Field(None, min_length=3)
+    robot_start_position: Point = Field((6.0, 42.0), description="Start [x, y], inches.")
+    robot_start_rotation: float = Field(180.0, description="Start heading, degrees from +y.")
+    robot_width: float = Field(6.0, gt=0, description="Side of the default square outline.")
+    robot_height: float = Field(6.0, gt=0, description="Tallest point of the robot, inches.")
+    robot_outline: tuple[Point, ...] | None = Field(
+        None, min_length=3, description="Polygon [[x, y], ...] in the robot frame, inches."
+    )
     # Maze
-    wall_segment_length: float = Field(12.0, gt=0)
-    floor_segment_length: float = Field(3.0, gt=0)
-    walls: tuple[tuple[int, ...], ...] = SIMMER_DEFAULT_WALLS
-    floor_seed: int = Field(5489, ge=0, lt=2**32)
+    wall_segment_length: float = Field(12.0, gt=0, description="Side of a maze cell, inches.")
+    floor_segment_length: float = Field(3.0, gt=0, description="Side of a floor tile, inches.")
+    walls: tuple[tuple[int, ...], ...] = Field(
+        SIMMER_DEFAULT_WALLS, description="Cell matrix, first row on top; 0 = solid, else floor."
+    )
+    floor_seed: int = Field(
+        5489, ge=0, lt=2**32, description="Floor pattern seed; 5489 is the lab maze's."
+    )
     # Graphics
-    frame_rate: float = Field(60.0, gt=0, le=10000)
-    ppi: float = Field(16.0, gt=0)
-    border_pixels: int = Field(20, ge=0)
-    background_color: Color = (43, 122, 120)
-    wall_thickness: float = Field(0.25, ge=0)
-    wall_color: Color = (255, 0, 0)
-    robot_thickness: float = Field(0.25, ge=0)
-    robot_color: Color = (0, 0, 255)
-    block_thickness: float = Field(0.25, ge=0)
-    block_color: Color = (127, 127, 20)
+    frame_rate: float = Field(60.0, gt=0, le=10000, description="Simulation steps per second.")
+    ppi: float = Field(16.0, gt=0, description="Window pixels per inch.")
+    border_pixels: int = Field(20, ge=0, description="Window border around the maze, pixels.")
+    background_color: Color = Field((43, 122, 120), description="Window background RGB.")
+    wall_thickness: float = Field(0.25, ge=0, description="Drawn wall width, inches.")
+    wall_color: Color = Field((255, 0, 0), description="Wall RGB.")
+    robot_thickness: float = Field(0.25, ge=0, description="Drawn robot outline width, inches.")
+    robot_color: Color = Field((0, 0, 255), description="Robot outline RGB.")
+    block_thickness: float = Field(0.25, ge=0, description="Drawn block outline width, inches.")
+    block_color: Color = Field((127, 127, 20), description="Block RGB.")
     # Debug
-    simulate_list: tuple[str, ...] = ()
+    simulate_list: tuple[str, ...] = Field(
+        (), description="Sensor ids read every step, so their measurement is always drawn."
+    )
 
     @field_validator("bias_strength")
     @classmethod

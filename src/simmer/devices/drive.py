@@ -86,7 +86,7 @@ class Motion:
 
 
 class Drive(Device):
-    """A drive (see the module docstring)."""
+    """Moves the robot along ``velocity`` or turns it at ``ang_velocity``, over several steps."""
 
     category: ClassVar[Category] = "drive"
     Params = DriveParams
