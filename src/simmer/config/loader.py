@@ -91,10 +91,14 @@ def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimCo
         issues += _issues_from_validation(exc, "", Settings)
 
     devices = _validate_devices(groups, issues)
-    issues += _check_drive_motors(devices)
+    declared = {
+        group: [str(device_id) for device_id in table] if isinstance(table, dict) else []
+        for group, table in groups.items()
+    }
+    issues += _check_drive_motors(devices, declared["motors"])
     if settings is not None:
         issues += _check_walls(settings)
-        issues += _check_references(settings, devices)
+        issues += _check_references(settings, declared)
         if not any(issue.key.startswith(("walls", "robot_", "block_")) for issue in issues):
             issues += _check_placement(settings)
     if issues:
@@ -297,9 +301,10 @@ def _check_walls(settings: Settings) -> list[ConfigIssue]:
     return issues
 
 
-def _check_drive_motors(devices: list[DeviceSpec]) -> list[ConfigIssue]:
+def _check_drive_motors(devices: list[DeviceSpec], motor_ids: list[str]) -> list[ConfigIssue]:
+    """Every motor a drive names must be declared (a declared but invalid one is reported
+    where it is declared, not again here)."""
     issues = []
-    motor_ids = [spec.id for spec in devices if spec.group == "motors"]
     for spec in devices:
         if spec.group != "drives":
             continue
@@ -316,15 +321,15 @@ def _check_drive_motors(devices: list[DeviceSpec]) -> list[ConfigIssue]:
     return issues
 
 
-def _check_references(settings: Settings, devices: list[DeviceSpec]) -> list[ConfigIssue]:
+def _check_references(settings: Settings, declared: dict[str, list[str]]) -> list[ConfigIssue]:
     issues = []
-    by_id = {spec.id: spec for spec in devices}
-    sensor_ids = [spec.id for spec in devices if spec.group == "sensors"]
+    group_of = {device_id: group for group, ids in declared.items() for device_id in ids}
+    sensor_ids = declared["sensors"]
     for i, device_id in enumerate(settings.simulate_list):
         if device_id not in sensor_ids:
             what = (
-                f"{device_id!r} is a {by_id[device_id].group[:-1]}"
-                if device_id in by_id
+                f"{device_id!r} is a {group_of[device_id][:-1]}"
+                if device_id in group_of
                 else (f"no sensor {device_id!r}{_did_you_mean(device_id, sensor_ids)}")
             )
             issues.append(
