@@ -245,3 +245,9 @@ def test_rand_bias_draws_a_bias_per_drive_from_the_seed() -> None:
     assert first == again
     assert first != other
     assert first.rotation != 0.0
+
+
+def test_infrared_height_may_come_from_the_position() -> None:
+    sensor = make_sim(with_sensor("i0", type="infrared", position=[0, 0, 2.0])).robot.sensors["i0"]
+    assert isinstance(sensor, Infrared)
+    assert sensor.radius == pytest.approx(2 * math.tan(math.radians(30)))

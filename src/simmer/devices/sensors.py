@@ -226,7 +226,10 @@ class Infrared(Device):
         self.settings = params
         half_fov = math.radians(params.fov / 2.0)
         trig = math.tan if params.radius_model == "geometric" else math.cos
-        self.radius = params.height * trig(half_fov)
+        height = params.height
+        if "height" not in params.model_fields_set and self.mount_height is not None:
+            height = self.mount_height  # [x, y, height] given instead of `height`
+        self.radius = height * trig(half_fov)
         self.last_time = -math.inf
         self.last_center = Vec2(0.0, 0.0)
         self.reading = math.nan
