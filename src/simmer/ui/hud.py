@@ -14,6 +14,7 @@ from simmer.ui.render import Color, Renderer
 from simmer.ui.scene import PANEL_HEIGHT, tint
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event, ResetEvent, StepEvent
+from simmer.world.simulation import MANUAL_KEYS
 
 log = logging.getLogger("simmer.ui")
 
@@ -130,6 +131,30 @@ def speed_text(speed: float | None) -> str:
     return "max" if speed is None else f"x{speed:g}"
 
 
+LABEL_X = 160
+VALUE_X = 320
+ROWS = (10, 36, 62, 88)
+COMMANDS_X = 700
+CLIENTS_X = 1200
+
+
+def _key_cap(r: Renderer, key: str, lit: bool) -> None:
+    row = next(i for i, keys in enumerate(KEY_LAYOUT) if key in keys)
+    x, y = 52 + KEY_LAYOUT[row].index(key) * 30, 12 + row * 30
+    r.draw_rect((x, y, 26, 26), LIT if lit else UNLIT)
+    r.draw_text(key.upper(), (x + 8, y + 6), (0, 0, 0) if lit else TEXT, 20)
+
+
+def paint_hud_static(r: Renderer) -> None:
+    """The HUD's fixed parts: unlit key caps and labels (painted once, into the static layer)."""
+    for key in MANUAL_KEYS:
+        _key_cap(r, key, lit=False)
+    r.draw_text("h: help", (12, 78), DIM, 20)
+    for label, y in zip(("time", "Task 2 stopwatch", "true pose", "collisions"), ROWS, strict=True):
+        r.draw_text(label, (LABEL_X, y), DIM, 22)
+    r.draw_text("last commands -> replies", (COMMANDS_X, ROWS[0]), DIM, 20)
+
+
 def paint_hud(
     r: Renderer,
     sim: Simulation,
@@ -141,53 +166,49 @@ def paint_hud(
     commands: Sequence[CommandEvent],
     clients: Sequence[str] | None,
 ) -> None:
-    """The panel above the maze; everything in simulated time."""
+    """The HUD's changing values; everything in simulated time."""
     # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
-    fade = sim.time % 1.0
-    r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), fade, UNLIT))
-    held = set(held)
-    for row, keys in enumerate(KEY_LAYOUT):
-        for col, key in enumerate(keys):
-            x, y = 52 + col * 30, 12 + row * 30
-            on = key in held
-            r.draw_rect((x, y, 26, 26), LIT if on else UNLIT)
-            r.draw_text(key.upper(), (x + 8, y + 6), (0, 0, 0) if on else TEXT, 20)
-    r.draw_text("h: help", (12, 78), DIM, 20)
+    r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), sim.time % 1.0, UNLIT))
+    for key in held:
+        _key_cap(r, key, lit=True)
 
-    x = 160
     state = "PAUSED (Space resumes, . steps)" if paused else "running"
-    r.draw_text(f"time {sim.time:8.2f} s   speed {speed_text(speed)}   {state}", (x, 10), TEXT, 22)
+    r.draw_text(
+        f"{sim.time:.2f} s   speed {speed_text(speed)}   {state}",
+        (VALUE_X, ROWS[0]),
+        LIT if paused else TEXT,
+        22,
+    )
     elapsed = stopwatch.elapsed()
     if elapsed is None:
-        watch = "Task 2 stopwatch: starts when the robot first moves"
+        watch, color = "starts when the robot first moves", DIM
     elif stopwatch.stop is None:
-        watch = f"Task 2 stopwatch: {elapsed:.2f} s"
+        watch, color = f"{elapsed:.2f} s", TEXT
     else:
-        watch = f"Task 2 stopwatch: reached the block in {elapsed:.2f} s"
-    r.draw_text(watch, (x, 36), LIT if stopwatch.stop is not None else TEXT, 22)
+        watch, color = f"reached the block in {elapsed:.2f} s", LIT
+    r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
     pose = sim.robot.pose
     r.draw_text(
-        f"true pose  x {pose.x:6.2f} in   y {pose.y:6.2f} in   heading {pose.heading:6.1f} deg",
-        (x, 62),
+        f"x {pose.x:.2f} in   y {pose.y:.2f} in   heading {pose.heading:.1f} deg",
+        (VALUE_X, ROWS[2]),
         TEXT,
         22,
     )
-    r.draw_text(f"collisions {sim.collisions}", (x, 88), TEXT, 22)
+    r.draw_text(str(sim.collisions), (VALUE_X, ROWS[3]), TEXT, 22)
 
-    x = 640
-    r.draw_text("last commands -> replies", (x, 10), DIM, 20)
+    if not commands:
+        r.draw_text("none yet", (COMMANDS_X, 32), DIM, 18)
     for i, event in enumerate(reversed(commands)):
         replies = ", ".join(_reply(v) for v in event.replies)
         line = f"{event.time:7.2f} s  {event.message[:28]} -> {replies[:40]}"
-        r.draw_text(line, (x, 30 + 16 * i), TEXT, 18)
+        r.draw_text(line, (COMMANDS_X, 32 + 16 * i), TEXT, 18)
 
     if clients is not None:
-        x = 1140
-        r.draw_text("connected clients", (x, 10), DIM, 20)
+        r.draw_text("connected clients", (CLIENTS_X, ROWS[0]), DIM, 20)
         for i, client in enumerate(clients[:5]):
-            r.draw_text(client, (x, 30 + 16 * i), TEXT, 18)
+            r.draw_text(client, (CLIENTS_X, 32 + 16 * i), TEXT, 18)
         if not clients:
-            r.draw_text("none", (x, 30), TEXT, 18)
+            r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
 
 
 def paint_help(r: Renderer, size: tuple[int, int]) -> None:

@@ -12,9 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from simmer.devices.base import Circle, Segment
-from simmer.geometry import FloatArray, heading_vector, place_polygon
+from simmer.geometry import FloatArray, place_polygon
 from simmer.ui.render import Color, Point, Renderer
 from simmer.world import Simulation
+from simmer.world.robot import Robot
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""
@@ -81,6 +82,38 @@ def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
     return (r, g, b)
 
 
+@dataclass
+class RobotShape:
+    """Robot outline, heading mark and visible device outlines stacked in one robot-frame array,
+    so a frame places them all with one call."""
+
+    robot: Robot
+    local: FloatArray
+    world: FloatArray
+    body: int
+    """Points ``[0, body)`` are the outline; the next two are the heading mark."""
+    devices: list[tuple[int, int, Color]]
+    """(start, stop, colour) of each visible device's outline."""
+
+    @classmethod
+    def of(cls, robot: Robot) -> RobotShape:
+        """Stack a robot's shapes."""
+        reach = 0.45 * float(np.min(np.abs(robot.outline).max(axis=0)))
+        pieces = [robot.outline, np.array([[0.0, 0.0], [0.0, reach]])]
+        devices = []
+        start = len(robot.outline) + 2
+        for device in robot.devices.values():
+            if device.visible:
+                placed = np.empty_like(device.outline)
+                x, y = device.position
+                place_polygon(device.outline, x, y, device.rotation, placed)
+                pieces.append(placed)
+                devices.append((start, start + len(placed), device.params.color))
+                start += len(placed)
+        local = np.concatenate(pieces)
+        return cls(robot, local, np.empty_like(local), len(robot.outline), devices)
+
+
 class ScenePainter:
     """Draws one simulation's maze, block, robot and sensors with any :class:`Renderer`."""
 
@@ -90,7 +123,7 @@ class ScenePainter:
         self.settings = settings
         self.robot_fill = tint(settings.robot_color, 0.75)
         self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
-        self._scratch: dict[str, FloatArray] = {}
+        self._robot_shape: RobotShape | None = None
 
     # ----------------------------------------------------------------- static layer
 
@@ -152,24 +185,19 @@ class ScenePainter:
             view.width(settings.block_thickness),
         )
         robot = sim.robot
+        stack = self._robot_shape
+        if stack is None or stack.robot is not robot:  # first frame, or after a reset
+            stack = self._robot_shape = RobotShape.of(robot)
         pose = robot.pose
-        body = self._placed("", robot.outline, pose.x, pose.y, pose.heading)
-        body_px = view.points(body)
-        r.draw_polygon(body_px, self.robot_fill)
-        r.draw_polygon(body_px, settings.robot_color, view.width(settings.robot_thickness))
-        reach = 0.45 * float(np.min(np.abs(robot.outline).max(axis=0)))
-        forward = heading_vector(pose.heading)
-        r.draw_segment(
-            view.point(pose.x, pose.y),
-            view.point(pose.x + forward.x * reach, pose.y + forward.y * reach),
-            settings.robot_color,
-            view.width(settings.robot_thickness),
-        )
-        for device in robot.devices.values():
-            if device.visible:
-                dpose = device.world_pose(pose)
-                outline = self._placed(device.id, device.outline, dpose.x, dpose.y, dpose.heading)
-                r.draw_polygon(view.points(outline), device.params.color, 2)
+        place_polygon(stack.local, pose.x, pose.y, pose.heading, stack.world)
+        points = view.points(stack.world)
+        body = points[: stack.body]
+        thickness = view.width(settings.robot_thickness)
+        r.draw_polygon(body, self.robot_fill)
+        r.draw_polygon(body, settings.robot_color, thickness)
+        r.draw_segment(points[stack.body], points[stack.body + 1], settings.robot_color, thickness)
+        for start, stop, color in stack.devices:
+            r.draw_polygon(points[start:stop], color, 2)
         for device in robot.devices.values():
             for shape in device.shapes(sim):
                 if isinstance(shape, Segment):
@@ -180,13 +208,3 @@ class ScenePainter:
                     )
         if ghost is not None:
             r.draw_polygon(view.points(ghost), GHOST_COLOR, 2)
-
-    def _placed(
-        self, key: str, local: FloatArray, x: float, y: float, heading: float
-    ) -> FloatArray:
-        """``local`` placed at a pose, in a reused scratch array (no per-frame allocation)."""
-        out = self._scratch.get(key)
-        if out is None or out.shape != local.shape:
-            out = self._scratch[key] = np.empty_like(local)
-        place_polygon(local, x, y, heading, out)
-        return out

@@ -14,8 +14,8 @@ from typing import Protocol
 import pygame
 
 from simmer.geometry import FloatArray, Pose, point_in_polygon
-from simmer.ui.hud import CommandLog, Stopwatch, paint_help, paint_hud
-from simmer.ui.render import PygameRenderer, TextCache
+from simmer.ui.hud import CommandLog, Stopwatch, paint_help, paint_hud, paint_hud_static
+from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.world import Simulation
 
@@ -115,6 +115,8 @@ class Window:
         self.ghost: FloatArray | None = None
         self.static = pygame.Surface((1, 1))
         self.view = View(1.0, 0.0, 0.0)
+        self._drawn: list[pygame.Rect] = []  # what the last frame drew over the static layer
+        self._updated: list[pygame.Rect] | None = None  # to show on screen; None: everything
         self.layout()
 
     # ----------------------------------------------------------------- layout
@@ -124,7 +126,10 @@ class Window:
         size = self.screen.get_size()
         self.view = View.fit(self.sim, size)
         self.static = pygame.Surface(size).convert() if self._own_display else pygame.Surface(size)
-        self.painter.paint_static(PygameRenderer(self.static, self.text), self.view, size)
+        static = PygameRenderer(self.static, self.text)
+        self.painter.paint_static(static, self.view, size)
+        paint_hud_static(static)
+        self._drawn = [self.static.get_rect()]
 
     # ----------------------------------------------------------------- the frame hook
 
@@ -140,14 +145,26 @@ class Window:
                 return False
         self.draw(ctl)
         if self._own_display:
-            pygame.display.flip()
+            pygame.display.update(self._updated)
         return True
 
     def draw(self, controls: Controls | None = None) -> None:
-        """Draw the whole frame on the surface (no flip)."""
+        """Draw the frame on the surface (no flip).
+
+        Only what the previous frame drew is restored from the cached static layer, so a frame
+        costs the size of the robot, rays and HUD values, not of the window.
+        """
         ctl = controls if controls is not None else self.local
-        self.screen.blit(self.static, (0, 0))
+        screen = self.screen
+        static = self.static
+        previous = self._drawn
+        if len(previous) == 1 and previous[0] == static.get_rect():
+            screen.blit(static, (0, 0))
+        else:
+            for rect in previous:
+                screen.blit(static, rect, rect)
         r = self.renderer
+        r.dirty.clear()
         self.painter.paint_dynamic(r, self.view, self.ghost)
         clients = getattr(ctl, "clients", None)
         paint_hud(
@@ -161,7 +178,9 @@ class Window:
             clients=list(clients) if clients is not None else None,
         )
         if self.show_help:
-            paint_help(r, self.screen.get_size())
+            paint_help(r, screen.get_size())
+        self._drawn = merge_rects(r.dirty)
+        self._updated = None if previous[0] == static.get_rect() else previous + self._drawn
 
     # ----------------------------------------------------------------- events
 

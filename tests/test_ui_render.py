@@ -1,0 +1,191 @@
+"""The renderer is separate from the model: recorded draw calls, then real pixels."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+
+import numpy as np
+import pygame
+import pytest
+
+from simmer import Simulation
+from simmer.devices.base import Segment
+from simmer.ui import PygameRenderer, RecordingRenderer, ScenePainter, View, Window
+from simmer.ui.render import merge_rects
+from simmer.ui.scene import BLACK_TILE, PANEL_HEIGHT, WHITE_TILE, default_window_size
+
+SMALL = """
+walls = [[1, 1]]
+block_position = [18, 6]
+robot_start_position = [6, 6]
+robot_start_rotation = 0
+ppi = 10
+border_pixels = 20
+"""
+
+
+def assert_close(actual: object, expected: object) -> None:
+    """Pixel coordinates equal to rounding error (nested sequences allowed)."""
+    np.testing.assert_allclose(np.asarray(actual, dtype=float), np.asarray(expected, dtype=float))
+
+
+@pytest.fixture
+def small(tmp_path: Path) -> Simulation:
+    """A 24 × 12 in maze of two open cells, a square robot, no devices."""
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL)
+    return Simulation.from_config(path)
+
+
+def test_static_layer_draw_calls(small: Simulation) -> None:
+    view = View(10.0, 20.0, 30.0)
+    rec = RecordingRenderer()
+    ScenePainter(small).paint_static(rec, view, (280, 170))
+    settings = small.config.settings
+    assert rec.calls[0].op == "fill"
+    assert rec.calls[0].args == (settings.background_color,)
+    rects = rec.of("rect")
+    tiles = [args for args in rects if args[1] in (WHITE_TILE, BLACK_TILE)]
+    assert len(tiles) == 8 * 4  # 3-in tiles over 24 × 12 in
+    for row in range(4):
+        for col in range(8):
+            rect, color, width = tiles[row * 8 + col]
+            assert rect == (20 + 30 * col, 30 + 30 * row, 30, 30)
+            assert color == (WHITE_TILE if small.maze.floor_white[row, col] else BLACK_TILE)
+            assert width == 0
+    walls = [args[0] for args in rects if args[1] == settings.wall_color]
+    # The boundary only (the two open cells share no wall): top, bottom, left, right.
+    half = settings.wall_thickness / 2 * 10
+    assert sorted(walls) == sorted(
+        [
+            (20 - half, 30 - half, 240 + 2 * half, 2 * half),
+            (20 - half, 150 - half, 240 + 2 * half, 2 * half),
+            (20 - half, 30 - half, 2 * half, 120 + 2 * half),
+            (260 - half, 30 - half, 2 * half, 120 + 2 * half),
+        ]
+    )
+
+
+def test_dynamic_layer_draw_calls(small: Simulation) -> None:
+    view = View(10.0, 20.0, 30.0)
+    rec = RecordingRenderer()
+    painter = ScenePainter(small)
+    painter.paint_dynamic(rec, view)
+    settings = small.config.settings
+    ops = [call.op for call in rec.calls]
+    # block fill + outline, robot fill + outline, heading mark; no floor or walls
+    assert ops == ["polygon", "polygon", "polygon", "polygon", "segment"]
+    block_points, block_color, _ = rec.calls[0].args
+    assert block_color == settings.block_color
+    assert_close(block_points, [(20 + x * 10, 30 + y * 10) for x, y in small.block.polygon])
+    robot_points, robot_fill, _ = rec.calls[2].args
+    assert robot_fill == painter.robot_fill
+    assert_close(robot_points, [(80 + x * 10, 90 + y * 10) for x, y in small.robot.outline])
+    outline = rec.calls[3].args
+    assert outline[1] == settings.robot_color
+    assert outline[2] == round(settings.robot_thickness * 10)
+    start, end, _, _ = rec.calls[4].args
+    assert_close(start, (80, 90))
+    assert end[1] > start[1]  # heading 0 points down the screen
+
+
+def test_measurements_and_devices_are_drawn() -> None:
+    sim = Simulation.from_config()  # the lab rover, all four ultrasonic sensors simulated
+    sim.step()
+    rec = RecordingRenderer()
+    painter = ScenePainter(sim)
+    view = View.fit(sim, default_window_size(sim))
+    painter.paint_dynamic(rec, view)
+    rays = rec.of("segment")[1:]  # after the heading mark
+    assert len(rays) == 4 * 7
+    u0 = sim.robot.sensors["u0"]
+    for (start, end, color, _), shape in zip(rays[:7], u0.shapes(sim), strict=True):
+        assert isinstance(shape, Segment)
+        assert_close(start, view.point(*shape.start))
+        assert_close(end, view.point(*shape.end))
+        assert color == (0, 255, 0)
+    device_outlines = [args for args in rec.of("polygon") if args[2] == 2]
+    visible = [d for d in sim.robot.devices.values() if d.visible]
+    assert len(device_outlines) == len(visible) == 6  # two motors, four sensors
+    assert_close(device_outlines[0][0], view.points(sim.robot.device_polygon(visible[0])))
+
+
+def test_pixels_on_a_real_surface() -> None:
+    sim = Simulation.from_config()
+    size = default_window_size(sim)
+    assert size == (1576, 920)  # fits a 1080p screen at the default ppi
+    pygame.display.init()
+    surface = pygame.Surface(size)
+    window = Window(sim, surface=surface)
+    window.draw()
+    view = window.view
+    settings = sim.config.settings
+    maze = sim.maze
+
+    def pixel(x: float, y: float) -> tuple[int, int, int]:
+        px, py = view.point(x, y)
+        r, g, b, _ = surface.get_at((int(px), int(py)))
+        return (r, g, b)
+
+    # Walls: the middle of every wall segment.
+    for x1, y1, x2, y2 in maze.segments.tolist():
+        assert pixel((x1 + x2) / 2, (y1 + y2) / 2) == settings.wall_color
+    # Floor tiles in open cells, away from the robot: colour matches floor_white.
+    checked = {True: 0, False: 0}
+    for row, col in np.ndindex(maze.floor_white.shape):
+        x, y = (col + 0.5) * maze.tile, (row + 0.5) * maze.tile
+        if maze.solid[int(y // maze.cell), int(x // maze.cell)] or abs(x - 6) + abs(y - 42) < 12:
+            continue
+        if abs(x - sim.block.x) + abs(y - sim.block.y) < 6:
+            continue
+        white = bool(maze.floor_white[row, col])
+        assert pixel(x, y) == (WHITE_TILE if white else BLACK_TILE), (row, col)
+        checked[white] += 1
+    assert checked[True] > 20
+    assert checked[False] > 20
+    assert pixel(sim.block.x, sim.block.y) == settings.block_color
+    pose = sim.robot.pose  # heading 180: robot frame (1.5, -1.5) is world (-1.5, +1.5)
+    assert pixel(pose.x - 1.5, pose.y + 1.5) == window.painter.robot_fill
+    assert pixel(pose.x + 2.875, pose.y + 3) == settings.robot_color  # robot frame (-2.875, -3)
+    window.close()
+
+
+def test_partial_redraw_matches_a_full_redraw() -> None:
+    sim = Simulation.from_config()
+    pygame.display.init()
+    size = default_window_size(sim)
+    window = Window(sim, surface=pygame.Surface(size))
+    window.draw()
+    sim.command("w0-12")
+    for _ in range(40):
+        sim.step()
+        window.draw()
+    fresh = Window(Simulation.from_config(), surface=pygame.Surface(size))
+    fresh.sim.command("w0-12")
+    fresh.sim.step(40)
+    fresh.draw()
+    maze_top = PANEL_HEIGHT + 1
+    area = pygame.Rect(0, maze_top, size[0], size[1] - maze_top)
+    a = pygame.surfarray.array3d(window.screen.subsurface(area))
+    b = pygame.surfarray.array3d(fresh.screen.subsurface(area))
+    assert np.array_equal(a, b)
+
+
+def test_merge_rects_joins_overlapping_neighbours() -> None:
+    merged = merge_rects(
+        [pygame.Rect(0, 0, 10, 10), pygame.Rect(2, 2, 10, 10), pygame.Rect(500, 500, 5, 5)]
+    )
+    assert merged == [pygame.Rect(0, 0, 12, 12), pygame.Rect(500, 500, 5, 5)]
+    assert merge_rects([]) == []
+
+
+def test_pygame_renderer_tracks_what_it_drew() -> None:
+    surface = pygame.Surface((100, 100))
+    r = PygameRenderer(surface)
+    r.draw_rect((10, 10, 5, 5), (255, 0, 0))
+    r.draw_text("hi", (50, 50), (255, 255, 255), 18)
+    assert r.dirty[0] == pygame.Rect(10, 10, 5, 5)
+    assert r.dirty[1].topleft == (50, 50)
