@@ -438,8 +438,8 @@ def _issues_from_validation(
             hint = _did_you_mean(name, _fields_at(model, loc[:-1]))
             message = f"unknown key{hint}; check its spelling or delete it"
         elif kind == "missing" and loc and isinstance(loc[-1], int):
+            message = f"has too few values (value number {loc[-1] + 1} is missing)"
             loc = loc[:-1]
-            message = f"has too few values (value number {error['loc'][-1] + 1} is missing)"
         elif kind == "missing":
             message = "required key is missing"
         else:

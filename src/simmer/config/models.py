@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import codecs
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -145,8 +145,3 @@ class SimConfig:
             if spec.id == device_id:
                 return spec
         raise KeyError(device_id)
-
-    def replace(self, **settings: Any) -> SimConfig:
-        """A copy with some settings changed (re-validated), e.g. ``replace(rand_bias=True)``."""
-        merged = self.settings.model_dump() | settings
-        return SimConfig(Settings.model_validate(merged), self.devices, self.source)

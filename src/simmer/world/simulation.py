@@ -17,7 +17,7 @@ import numpy as np
 from simmer.config.loader import load_config
 from simmer.config.models import SimConfig
 from simmer.devices import Axes, Device, Drive, get_device_kind
-from simmer.errors import CommandError
+from simmer.errors import CommandError, DeviceKindError
 from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
 from simmer.protocol import STOP_ID, Command, parse_message
 from simmer.world.events import (
@@ -74,7 +74,7 @@ class Simulation:
         for spec in self.config.devices:
             kind = get_device_kind(spec.kind)
             if kind is None:
-                raise CommandError(f"device kind {spec.kind!r} is no longer registered")
+                raise DeviceKindError(f"device kind {spec.kind!r} is no longer registered")
             devices.append(kind(spec.id, spec.params, self.rng))
         start = Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
         self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
