@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import pickle
 from typing import Any
 
 import pytest
@@ -144,3 +145,15 @@ def test_place_robot_refuses_walls() -> None:
     assert not sim.place_robot(-20.0, 30.0, 0.0)  # outside the maze
     assert sim.robot.pose == sim.robot.start_pose
     assert sim.place_robot(30.0, 42.0, 90.0)
+
+
+def test_configuration_and_simulation_pickle_for_parallel_runs() -> None:
+    sim = Simulation.from_config(EXAMPLES / "simmer_default.toml")
+    assert pickle.loads(pickle.dumps(sim.config)) == sim.config
+    sim.command("w0-5")
+    sim.step(10)
+    copy = pickle.loads(pickle.dumps(sim))
+    sim.run_until_idle()
+    copy.run_until_idle()
+    assert copy.robot.pose == sim.robot.pose
+    assert copy.command("u0,u1,c0,i0,g0") == sim.command("u0,u1,c0,i0,g0")
