@@ -16,13 +16,14 @@ draw must come from that generator, so a seeded run is repeatable.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from simmer.geometry import FloatArray, Pose, Vec2, rectangle, rotate
+from simmer.geometry import FloatArray, Pose, Vec2, rectangle
 
 if TYPE_CHECKING:
     from simmer.world.maze import Block, Maze
@@ -146,12 +147,11 @@ class Device:
 
     def world_pose(self, robot_pose: Pose) -> Pose:
         """Where the device is, and which way it faces, in the world."""
-        offset = rotate(self.position.x, self.position.y, robot_pose.heading)
-        return Pose(
-            robot_pose.x + offset.x,
-            robot_pose.y + offset.y,
-            robot_pose.heading + self.rotation,
-        )
+        x, y, heading = robot_pose
+        px, py = self.position
+        rad = math.radians(heading)
+        c, s = math.cos(rad), math.sin(rad)
+        return Pose(x + px * c - py * s, y + px * s + py * c, heading + self.rotation)
 
     def percent_error(self, value: float, error: float) -> float:
         """SimMeR's percent error: ``value + gauss(0, 2) · error · value`` (BEHAVIOUR §4)."""

@@ -83,7 +83,7 @@ class Ultrasonic(Device):
     def simulate(self, value: float, world: World) -> float:
         """Measure the distance in inches, with noise, clamped to [min_range, max_range]."""
         s = self.settings
-        pose = self.world_pose(world.robot.pose)
+        x, y, heading = self.world_pose(world.robot.pose)
         maze = world.maze
         distance = cast_fan(
             maze.hwall,
@@ -91,21 +91,21 @@ class Ultrasonic(Device):
             maze.cell,
             maze.segments,
             world.block.segments,
-            self.sees_block(world, pose.x, pose.y),
-            pose.x,
-            pose.y,
-            pose.heading,
+            self.sees_block(world, x, y),
+            x,
+            y,
+            heading,
             s.beamwidth,
             s.max_range,
             self.rays,
         )
-        if math.isinf(distance):
+        if distance == math.inf:
             reading = s.max_range
         else:
             reading = min(max(self.percent_error(distance, s.error), s.min_range), s.max_range)
         self.last_time = world.time
-        self.last_origin = Vec2(pose.x, pose.y)
-        self.last_heading = pose.heading
+        self.last_origin = Vec2(x, y)
+        self.last_heading = heading
         self.reading = reading
         return reading
 
