@@ -40,7 +40,7 @@ def load_config(path: str | Path | None = None) -> SimConfig:
             path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
         )
     if path.suffix == ".py":
-        from simmer.config.simmer_py import load_simmer_py  # type: ignore[import-not-found]
+        from simmer.config.simmer_py import load_simmer_py
 
         loaded: SimConfig = load_simmer_py(path)
         return loaded
@@ -90,7 +90,7 @@ def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimCo
     except ValidationError as exc:
         issues += _issues_from_validation(exc, "", Settings)
 
-    devices = _validate_devices(groups, issues)
+    devices = _validate_devices(groups, issues, base_dir)
     declared = {
         group: [str(device_id) for device_id in table] if isinstance(table, dict) else []
         for group, table in groups.items()
@@ -170,7 +170,9 @@ def _describe_plugin_error(entry: str, exc: Exception) -> str:
 # ----------------------------------------------------------------------------- devices
 
 
-def _validate_devices(groups: dict[str, Any], issues: list[ConfigIssue]) -> list[DeviceSpec]:
+def _validate_devices(
+    groups: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
+) -> list[DeviceSpec]:
     devices: list[DeviceSpec] = []
     seen: dict[str, str] = {}
     for group in DEVICE_GROUPS:
@@ -197,7 +199,7 @@ def _validate_devices(groups: dict[str, Any], issues: list[ConfigIssue]) -> list
                     )
                 )
             seen.setdefault(device_id, group)
-            spec = _validate_device(group, device_id, raw, issues)
+            spec = _validate_device(group, device_id, raw, issues, base_dir)
             if spec is not None:
                 devices.append(spec)
     return devices
@@ -217,7 +219,7 @@ def _id_problem(device_id: str) -> str | None:
 
 
 def _validate_device(
-    group: str, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue]
+    group: str, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
 ) -> DeviceSpec | None:
     key = f"{group}.{device_id}"
     raw = dict(raw)
@@ -259,7 +261,8 @@ def _validate_device(
         )
         return None
     try:
-        params = kind.Params.model_validate(raw)
+        # base_dir lets a kind resolve file paths relative to the configuration file
+        params = kind.Params.model_validate(raw, context={"base_dir": base_dir})
     except ValidationError as exc:
         issues += _issues_from_validation(exc, key, kind.Params)
         return None

@@ -1,0 +1,334 @@
+"""Run a device class written for the original SimMeR (from its ``devices/template.py``).
+
+Such a class is built from an info dictionary, answers ``simulate(value, environment)`` with a
+number, may have ``update(environment)``, and sets ``d_type``. The adapter kind
+``simmer_device`` (a sensor) names the file and class::
+
+    [sensors.t0]
+    type = "simmer_device"
+    module = "devices/template.py"   # relative to the configuration file
+    class_name = "Template"
+    position = [0, 3]
+    threshold = 2                     # any other key goes into the info dictionary
+
+The class is built on first use, from an info dictionary holding ``id``, ``position``,
+``rotation``, ``visible`` and every other key given (``outline`` as ``pygame.math.Vector2``s).
+``environment`` is a dictionary like SimMeR's: ``environment['ROBOT']`` (``position``,
+``rotation``, ``pose``, ``outline``, ``height``), ``environment['MAZE']`` (``walls``,
+``wall_segment_length``, ``floor_segment_length``, ``reduced_walls``),
+``environment['BLOCK']`` (``position``, ``rotation``, ``size``, ``height``, ``block_square``)
+and ``environment['TIME']`` (simulated seconds). Before each call the device's
+``position_global`` and ``rotation_global`` are set, and ``import config as CONFIG`` gives the
+running configuration's settings. Drawing methods (``draw``, ``draw_measurement``) are not called.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import inspect
+import logging
+import sys
+import traceback
+import types
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+from pydantic import ConfigDict, ValidationInfo, field_validator
+
+from simmer.compat.standins import UTILITIES, StandIns, Vector2
+from simmer.devices import Device, DeviceParams, World, register_device_kind
+from simmer.devices.base import Category
+from simmer.errors import CommandError
+
+log = logging.getLogger(__name__)
+
+KIND = "simmer_device"
+
+
+@dataclass(frozen=True)
+class LoadedModule:
+    """A user's device module, imported once with the stand-ins, and its ``config`` module."""
+
+    module: types.ModuleType
+    config: types.ModuleType
+
+
+_LOADED: dict[tuple[str, int], LoadedModule] = {}
+
+
+def remember_module(module: types.ModuleType, config: types.ModuleType) -> None:
+    """Keep a device module imported while a ``config.py`` ran, so it is not imported again."""
+    path = Path(str(module.__file__)).resolve()
+    _LOADED[(str(path), path.stat().st_mtime_ns)] = LoadedModule(module, config)
+
+
+def module_file(cls: type) -> Path | None:
+    """The file of the remembered device module that defines ``cls``, if any."""
+    for loaded in _LOADED.values():
+        if vars(loaded.module).get(cls.__name__) is cls:
+            return Path(str(loaded.module.__file__)).resolve()
+    return None
+
+
+def load_module(path: Path) -> LoadedModule:
+    """Import a user's device file with the stand-ins in place (once per file version)."""
+    path = path.resolve()
+    key = (str(path), path.stat().st_mtime_ns)
+    if key not in _LOADED:
+        config = types.ModuleType("config", "The running configuration's settings.")
+        name = f"devices.{path.stem}"
+        with StandIns(path.parent.parent, [path.parent], config):
+            spec = importlib.util.spec_from_file_location(name, path)
+            assert spec is not None
+            assert spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+        _LOADED[key] = LoadedModule(module, config)
+    return _LOADED[key]
+
+
+def describe_exception(exc: BaseException, files: list[Path]) -> str:
+    """``Type: message (file.py line N)`` naming the innermost frame in one of ``files``."""
+    wanted = {f.resolve() for f in files}
+    where = ""
+    for frame in reversed(traceback.extract_tb(exc.__traceback__)):
+        if Path(frame.filename).resolve() in wanted:
+            where = f" ({Path(frame.filename).name} line {frame.lineno})"
+            break
+    return f"{type(exc).__name__}: {exc}{where}"
+
+
+def check_device_class(cls: object, where: str) -> type:
+    """Raise ValueError, saying what to change, unless ``cls`` looks like a SimMeR device class."""
+    if not inspect.isclass(cls):
+        raise ValueError(f"{where} is not a class")
+    simulate = getattr(cls, "simulate", None)
+    if not callable(simulate):
+        raise ValueError(
+            f"{where} has no simulate method; add `def simulate(self, value, environment):` "
+            "returning a number"
+        )
+    for method, wanted in (("simulate", "value, environment"), ("update", "environment")):
+        function = getattr(cls, method, None)
+        if function is None:
+            continue
+        try:
+            inspect.signature(function).bind(None, *wanted.split(", "))
+        except TypeError:
+            raise ValueError(
+                f"{where}.{method} must be defined as `def {method}(self, {wanted}):`"
+            ) from None
+    return cls
+
+
+class SimmerDeviceParams(DeviceParams):
+    """A SimMeR-style device class: its file and name, plus its info dictionary's keys."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+    type: str = KIND
+    module: str
+    class_name: str
+
+    @field_validator("module")
+    @classmethod
+    def _resolve(cls, value: str, info: ValidationInfo) -> str:
+        base = Path((info.context or {}).get("base_dir", "."))
+        path = (base / value).resolve()
+        if not path.is_file():
+            raise ValueError(
+                f"no file {value!r} next to the configuration ({base}); give the device file's "
+                "path relative to the configuration file, e.g. 'devices/template.py'"
+            )
+        return str(path)
+
+    @field_validator("class_name")
+    @classmethod
+    def _find_class(cls, value: str, info: ValidationInfo) -> str:
+        module_path = info.data.get("module")
+        if module_path is None:
+            return value
+        path = Path(module_path)
+        try:
+            module = load_module(path).module
+        except Exception as exc:
+            raise ValueError(
+                f"importing {path.name} failed: {describe_exception(exc, [path])}"
+            ) from None
+        if not hasattr(module, value):
+            classes = [n for n, o in vars(module).items() if inspect.isclass(o)]
+            raise ValueError(f"{path.name} has no class {value!r}; it has: {', '.join(classes)}")
+        check_device_class(getattr(module, value), f"class {value} in {path.name}")
+        return value
+
+
+class _RobotView:
+    """``environment['ROBOT']``: the robot's live pose, outline and height."""
+
+    def __init__(self, world: World) -> None:
+        self._world = world
+        self.outline = [Vector2(x, y) for x, y in world.robot.outline]
+        self.height = world.robot.height
+
+    @property
+    def pose(self) -> Any:
+        """The pose (x, y, heading)."""
+        return self._world.robot.pose
+
+    @property
+    def position(self) -> Vector2:
+        """Centre of the robot, inches."""
+        return Vector2(self.pose.x, self.pose.y)
+
+    @property
+    def rotation(self) -> float:
+        """Heading, degrees."""
+        return float(self.pose.heading)
+
+
+def _segments(array: np.ndarray[Any, Any]) -> list[list[Vector2]]:
+    return [[Vector2(a, b), Vector2(c, d)] for a, b, c, d in array.tolist()]
+
+
+class _MazeView:
+    """``environment['MAZE']``: the wall matrix, sizes and wall segments."""
+
+    def __init__(self, world: World) -> None:
+        maze = world.maze
+        self.walls = [list(row) for row in maze.cells]
+        self.wall_segment_length = maze.cell
+        self.floor_segment_length = maze.tile
+        self.reduced_walls = _segments(maze.segments)
+
+
+class _BlockView:
+    """``environment['BLOCK']``: the block's live position, size and edges."""
+
+    def __init__(self, world: World) -> None:
+        self._world = world
+
+    @property
+    def position(self) -> Vector2:
+        """Centre of the block."""
+        return Vector2(self._world.block.x, self._world.block.y)
+
+    @property
+    def rotation(self) -> float:
+        """Rotation, degrees."""
+        return self._world.block.rotation
+
+    @property
+    def size(self) -> float:
+        """Side length (also its height)."""
+        return self._world.block.size
+
+    height = size
+
+    @property
+    def block_square(self) -> list[list[Vector2]]:
+        """The four edges as [start, end] pairs."""
+        return _segments(self._world.block.segments)
+
+
+class Environment(dict[str, Any]):
+    """What SimMeR passed as ``environment``: keys ROBOT, MAZE, BLOCK and TIME."""
+
+    def __init__(self, world: World) -> None:
+        super().__init__(
+            ROBOT=_RobotView(world), MAZE=_MazeView(world), BLOCK=_BlockView(world), TIME=0.0
+        )
+
+
+def config_values(world: World) -> dict[str, Any]:
+    """Settings a SimMeR device may read as ``CONFIG.<name>``."""
+    config = getattr(world, "config", None)
+    if config is None:
+        return {}
+    values: dict[str, Any] = config.settings.model_dump()
+    values["maze_dim_x"] = len(values["walls"][0]) * values["wall_segment_length"]
+    values["maze_dim_y"] = len(values["walls"]) * values["wall_segment_length"]
+    return values
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, tuple | list):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+class SimmerDevice(Device):
+    """Adapter: a SimMeR device class answering commands as a SimMeR 2 sensor."""
+
+    Params = SimmerDeviceParams
+    category: ClassVar[Category] = "sensor"
+
+    def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
+        super().__init__(device_id, params, rng)
+        assert isinstance(params, SimmerDeviceParams)
+        self.loaded = load_module(Path(params.module))
+        self.user_class: type = getattr(self.loaded.module, params.class_name)
+        skip = {"type", "module", "class_name", "position", "rotation", "visible", "outline"}
+        self.info: dict[str, Any] = {
+            "id": device_id,
+            "position": list(params.position),
+            "rotation": params.rotation,
+            "visible": params.visible,
+        }
+        if "outline" in params.model_fields_set and params.outline is not None:
+            self.info["outline"] = [Vector2(x, y) for x, y in params.outline]
+        self.info |= {
+            k: _plain(v) for k, v in params.model_dump(exclude_unset=True).items() if k not in skip
+        }
+        self.instance: Any = None
+        self.environment: Environment | None = None
+        self.broken = False
+
+    def _prepare(self, world: World) -> tuple[Any, Environment]:
+        """Build the user's object on first use; refresh its global pose and the time."""
+        if self.instance is None or self.environment is None:
+            self.loaded.config.__dict__.update(config_values(world))
+            self.instance = self.user_class(dict(self.info))
+            self.environment = Environment(world)
+        pose = self.world_pose(world.robot.pose)
+        self.instance.position_global = Vector2(pose.x, pose.y)
+        self.instance.rotation_global = pose.heading
+        self.environment["TIME"] = world.time
+        UTILITIES.rng = self.rng  # type: ignore[attr-defined]
+        return self.instance, self.environment
+
+    def simulate(self, value: float, world: World) -> float:
+        """Call the class's ``simulate(value, environment)``; its answer must be a number."""
+        instance, environment = self._prepare(world)
+        answer = instance.simulate(value, environment)
+        try:
+            return float(answer)
+        except (TypeError, ValueError):
+            raise CommandError(
+                f"{self.user_class.__name__}.simulate returned {answer!r}, not a number; make it "
+                "return a float"
+            ) from None
+
+    def update(self, world: World) -> None:
+        """Call the class's ``update(environment)`` each step, if it has one.
+
+        An exception is logged once and that device's updates stop, so one faulty device
+        cannot stop the simulation.
+        """
+        if self.broken or not hasattr(self.user_class, "update"):
+            return
+        try:
+            instance, environment = self._prepare(world)
+            instance.update(environment)
+        except Exception:
+            self.broken = True
+            log.exception("device %s (%s) failed; its updates stop", self.id, self.user_class)
+
+
+register_device_kind(KIND, SimmerDevice)
+
+__all__ = ["KIND", "Environment", "SimmerDevice", "SimmerDeviceParams"]
