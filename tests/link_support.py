@@ -1,0 +1,75 @@
+"""Helpers for the control-link tests: a live simulator on free loopback ports."""
+
+from __future__ import annotations
+
+import socket
+import struct
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from simmer.runner import Runner
+from simmer.transport import Link
+from simmer.world import Simulation
+
+
+@contextmanager
+def serving(
+    sim: Simulation | None = None,
+    *,
+    speed: float | None = 1.0,
+    serial: bool = False,
+    serial_link: Path | None = None,
+) -> Iterator[tuple[Runner, Link]]:
+    """Run a simulation (default: the built-in one) in a loop thread, serving every transport
+    on free ports; everything is stopped and closed on exit."""
+    sim = sim if sim is not None else Simulation.from_config()
+    runner = Runner(sim, speed=speed)
+    stop = threading.Event()
+    link = Link(
+        runner.bus,
+        sim.config.settings,
+        port_rx=0,
+        port_tx=0,
+        stream_port=0,
+        serial=serial,
+        serial_link=serial_link,
+    )
+    thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
+    with link:
+        thread.start()
+        try:
+            yield runner, link
+        finally:
+            stop.set()
+            thread.join()
+            runner.bus.close()
+
+
+def two_port_send(link: Link, message: bytes, width: int = 4) -> list[float]:
+    """The original clients' way: send on port_rx and close, then read port_tx to the end."""
+    with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
+        out.sendall(message)
+    data = b""
+    with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
+        while chunk := back.recv(1024):
+            data += chunk
+    code = "<f" if width == 4 else "<d"
+    return [value for (value,) in struct.iter_unpack(code, data)]
+
+
+def read_frame(sock: socket.socket) -> list[float]:
+    """Read one persistent-protocol reply frame."""
+
+    def exactly(size: int) -> bytes:
+        data = b""
+        while len(data) < size:
+            chunk = sock.recv(size - len(data))
+            assert chunk, "connection closed mid-frame"
+            data += chunk
+        return data
+
+    width, count = struct.unpack("<BH", exactly(3))
+    code = "<f" if width == 4 else "<d"
+    return [value for (value,) in struct.iter_unpack(code, exactly(width * count))]
