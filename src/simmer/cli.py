@@ -92,6 +92,28 @@ def run(
     out.print(f"t = {sim.time:.2f} s, robot at {sim.robot.pose}", markup=False)
 
 
+@app.command()
+def convert(
+    config: Annotated[Path, typer.Argument(help="A SimMeR config.py to convert.")],
+    output: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", help="TOML file to write (default: print it)."),
+    ] = None,
+) -> None:
+    """Convert a SimMeR config.py to the native TOML format, keeping its comments."""
+    from simmer.config.convert import convert_simmer_py
+
+    try:
+        text = convert_simmer_py(config, output)
+    except ConfigError as exc:
+        _report_config_error(exc)
+        raise typer.Exit(1) from None
+    if output is None:
+        out.print(text, markup=False, end="")
+    else:
+        out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+
+
 def main() -> None:
     """Entry point of the ``simmer`` console script."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")

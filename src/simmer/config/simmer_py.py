@@ -387,7 +387,7 @@ class _Mapper:
         for key in dropped:
             del native[key]
         if dropped:
-            log.info("%s: %s: not used by SimMeR 2, ignored: %s", self.result.path, path, dropped)
+            log.debug("%s: %s: not used by SimMeR 2, ignored: %s", self.result.path, path, dropped)
 
     def _value(self, value: Any) -> Any:
         if isinstance(value, StandInDevice):
