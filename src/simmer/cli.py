@@ -76,19 +76,63 @@ def run(
     seconds: Annotated[
         float | None, typer.Option(help="Stop after this many simulated seconds.")
     ] = None,
+    speed: Annotated[
+        str, typer.Option(help="Speed as a multiple of real time (e.g. 2), or 'max'.")
+    ] = "1",
+    seed: Annotated[
+        int | None, typer.Option(help="Noise seed (overrides the configuration's).")
+    ] = None,
+    host: Annotated[
+        str | None,
+        typer.Option(help="Address to listen on (default: the configuration's, 127.0.0.1)."),
+    ] = None,
+    port_rx: Annotated[
+        int | None, typer.Option(help="SimMeR two-port scheme: message port (default 61200).")
+    ] = None,
+    port_tx: Annotated[
+        int | None, typer.Option(help="SimMeR two-port scheme: reply port (default 61201).")
+    ] = None,
+    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = 61202,
+    serial: Annotated[
+        bool, typer.Option(help="Also serve a virtual serial port (a pseudo-terminal).")
+    ] = False,
+    serial_link: Annotated[
+        Path | None, typer.Option(help="Make a stable link to the serial port at this path.")
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover)."""
+    from simmer.serve import parse_speed
     from simmer.world import Simulation
 
     try:
-        sim = Simulation(load_config(config))
+        pace = parse_speed(speed)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    try:
+        sim = Simulation(load_config(config), seed=seed)
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
     out.print(summarize(sim.config), markup=False)
-    out.print(f"noise seed {sim.seed}; running headless", markup=False)
-    steps = round((seconds if seconds is not None else 1.0) / sim.dt)
-    sim.step(steps)
+    from simmer.serve import run_headless
+
+    out.print(f"noise seed {sim.seed}", markup=False)
+    try:
+        run_headless(
+            sim,
+            speed=pace,
+            seconds=seconds,
+            host=host,
+            port_rx=port_rx,
+            port_tx=port_tx,
+            stream_port=port,
+            serial=serial,
+            serial_link=serial_link,
+            echo=lambda line: out.print(line, markup=False),
+        )
+    except OSError as exc:
+        err.print(f"[bold red]cannot serve: {exc}[/] (is another simmer running?)")
+        raise typer.Exit(1) from None
     out.print(f"t = {sim.time:.2f} s, robot at {sim.robot.pose}", markup=False)
 
 
@@ -112,6 +156,34 @@ def convert(
         out.print(text, markup=False, end="")
     else:
         out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+
+
+@app.command()
+def console(
+    host: Annotated[str, typer.Option(help="Simulator address.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = 61202,
+    two_port: Annotated[
+        bool, typer.Option(help="Use SimMeR's two-port scheme (61200/61201) instead.")
+    ] = False,
+    serial: Annotated[
+        str | None, typer.Option(help="Talk to a serial port (virtual or the robot's) instead.")
+    ] = None,
+    baud: Annotated[int, typer.Option(help="Serial baud rate.")] = 9600,
+) -> None:
+    """Interactive console: type commands (u0, w0-6, ...) and see the replies."""
+    from simmer.client import connect
+    from simmer.console import run_console
+    from simmer.errors import ClientError
+
+    try:
+        client = connect(
+            host, port, scheme="two-port" if two_port else None, serial=serial, baudrate=baud
+        )
+    except ClientError as exc:
+        err.print(f"[bold red]{exc}[/]")
+        raise typer.Exit(1) from None
+    with client:
+        run_console(client)
 
 
 def main() -> None:
