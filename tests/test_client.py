@@ -1,0 +1,71 @@
+"""simmer.client over every transport, and its errors."""
+
+from __future__ import annotations
+
+import math
+import socket
+
+import pytest
+
+from link_support import serving
+from simmer.client import connect
+from simmer.console import format_reply, run_console
+from simmer.errors import ConnectionFailed, ReplyTimeout
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def test_same_calls_over_every_transport() -> None:
+    with serving(speed=None, serial=True) as (runner, link):
+        assert link.serial is not None
+        clients = [
+            connect(port=link.stream.port),
+            connect(
+                scheme="two-port", port_rx=link.two_port.port_rx, port_tx=link.two_port.port_tx
+            ),
+            connect(serial=link.serial.path, timeout=5),
+        ]
+        for client in clients:
+            with client:
+                assert client.read("u1") == pytest.approx(3.5)
+                assert client.send("u1,zz")[0] == pytest.approx(3.5)
+                assert math.isnan(client.send("u1,zz")[1])
+                assert client.drive("w0", 1) == math.inf
+                client.wait_idle()
+                assert client.read("m0") > 0
+        assert runner.sim.robot.pose.y == pytest.approx(39.0)
+
+
+def test_refused_connection_is_connection_failed() -> None:
+    port = free_port()
+    with pytest.raises(ConnectionFailed, match="simmer run"):
+        connect(port=port)
+    client = connect(scheme="two-port", port_rx=port, port_tx=free_port())
+    with pytest.raises(ConnectionFailed):
+        client.send("u0")
+    with pytest.raises(ConnectionFailed, match="serial"):
+        connect(serial="/nonexistent/tty")
+
+
+def test_silent_server_is_reply_timeout() -> None:
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        client = connect(port=server.getsockname()[1], timeout=0.2)
+        conn, _ = server.accept()
+        with conn, client, pytest.raises(ReplyTimeout):
+            client.send("u0")
+
+
+def test_console_prints_replies() -> None:
+    lines = iter(["u1", "", "w0-abc", "quit"])
+    shown: list[str] = []
+    with serving() as (_, link), connect(port=link.stream.port) as client:
+        run_console(client, read=lambda _: next(lines), echo=shown.append, history=False)
+    assert shown[1] == "u1: 3.500"
+    assert shown[2] == "w0-abc: nan"
+    assert format_reply(math.inf) == "+inf (accepted)"

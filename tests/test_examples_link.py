@@ -1,0 +1,70 @@
+"""The lab's example control programs, run against a live simulator."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from types import ModuleType
+
+import pytest
+from typer.testing import CliRunner
+
+from link_support import serving
+from simmer.cli import app
+
+from helpers import EXAMPLES, default_data, make_sim
+
+pytestmark = pytest.mark.timeout(90)
+
+
+def load(name: str) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_dead_reckoning_reaches_the_block(capsys: pytest.CaptureFixture[str]) -> None:
+    with serving(speed=None) as (runner, link):
+        readings = load("dead_reckoning").main(["--port", str(link.stream.port)])
+        pose = runner.sim.robot.pose
+    assert math.dist((pose.x, pose.y), (66, 12)) < 0.5
+    assert readings[-1][0] == pytest.approx(3.0, abs=0.2)
+    assert "u3" in capsys.readouterr().out
+
+
+def test_obstacle_avoidance_stops_short_of_the_wall() -> None:
+    with serving(speed=None) as (runner, link):
+        steps = load("obstacle_avoidance").main(["--port", str(link.stream.port)])
+        reading = runner.bus.submit("u0,u1,u2,u3", "test").result(timeout=5)
+    assert 0 < steps < 200
+    assert 0 < min(reading) < 2.0
+
+
+@pytest.mark.parametrize("width", [4, 8])
+def test_original_style_client_example(width: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    data = default_data()
+    data["reply_bytes"] = width
+    client = load("simmer_v1_client")
+    with serving(make_sim(data)) as (_, link):
+        monkeypatch.setattr(client, "PORT_TX", link.two_port.port_rx)
+        monkeypatch.setattr(client, "PORT_RX", link.two_port.port_tx)
+        monkeypatch.setattr(client, "REPLY_BYTES", width)
+        assert client.send("u1,w0-1") == [pytest.approx(3.5), math.inf]
+
+
+def test_cli_run_headless_serves_until_the_time_limit() -> None:
+    result = CliRunner().invoke(
+        app,
+        ["run", "--headless", "--speed", "max", "--seconds", "1", "--seed", "7", "--port", "0",
+         "--port-rx", "0", "--port-tx", "0"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "persistent TCP" in result.output
+    assert "noise seed 7" in result.output
+    bad = CliRunner().invoke(app, ["run", "--headless", "--speed", "fast"])
+    assert bad.exit_code != 0
