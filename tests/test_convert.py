@@ -57,7 +57,7 @@ def test_device_entry_comment_goes_on_its_table_header() -> None:
     text = convert_simmer_py(WITH_DEVICE)
     assert "[sensors.b0] # the user's own device" in text
     assert line_with(text, "position = [0, -2]").endswith("# at the back of the rover")
-    assert 'plugins = ["simmer.compat.template"]' in line_with(text, "plugins")
+    assert "plugins" not in text  # simmer_device is a built-in kind
 
 
 def test_commented_out_lines_are_not_settings() -> None:

@@ -317,3 +317,18 @@ def test_check_reports_a_broken_config_without_traceback(tmp_path: Path) -> None
     assert result.exception is None or isinstance(result.exception, SystemExit)
     text = " ".join(result.output.split())
     assert f"{path}:{line_of(path, DIRECTION)}" in text
+
+
+def test_toml_simmer_device_needs_file_and_class(tmp_path: Path) -> None:
+    shutil.copytree(FIXTURES / "with_device" / "devices", tmp_path / "devices")
+    toml = tmp_path / "robot.toml"
+    toml.write_text(
+        '[sensors.t0]\ntype = "simmer_device"\n\n'
+        '[sensors.t1]\ntype = "simmer_device"\nmodule = "devices/beacon.py"\n'
+        'class_name = "Becon"\n',
+        encoding="utf-8",
+    )
+    text = str(error_of(toml))
+    assert "sensors.t0.module: missing" in text
+    assert "sensors.t0.class_name: missing" in text
+    assert "sensors.t1.class_name: Value error, beacon.py has no class 'Becon'" in text

@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
-from pydantic import ConfigDict, ValidationInfo, field_validator
+from pydantic import ConfigDict, Field, ValidationInfo, field_validator
 
 from simmer.compat.standins import UTILITIES, StandIns, Vector2
 from simmer.devices import Device, DeviceParams, World, register_device_kind
@@ -130,12 +130,14 @@ class SimmerDeviceParams(DeviceParams):
     model_config = ConfigDict(extra="allow", frozen=True)
 
     type: str = KIND
-    module: str
-    class_name: str
+    module: str = Field("", description="The class's .py file, relative to the configuration.")
+    class_name: str = Field("", description="The class's name, e.g. 'Template'.")
 
     @field_validator("module")
     @classmethod
     def _resolve(cls, value: str, info: ValidationInfo) -> str:
+        if not value:
+            return value
         base = Path((info.context or {}).get("base_dir", "."))
         path = (base / value).resolve()
         if not path.is_file():
@@ -149,7 +151,7 @@ class SimmerDeviceParams(DeviceParams):
     @classmethod
     def _find_class(cls, value: str, info: ValidationInfo) -> str:
         module_path = info.data.get("module")
-        if module_path is None:
+        if not (module_path and value):
             return value
         path = Path(module_path)
         try:
@@ -163,6 +165,15 @@ class SimmerDeviceParams(DeviceParams):
             raise ValueError(f"{path.name} has no class {value!r}; it has: {', '.join(classes)}")
         check_device_class(getattr(module, value), f"class {value} in {path.name}")
         return value
+
+    def problems(self) -> list[tuple[str, str]]:
+        """The file and class must be named (checked here so the defaults stay buildable)."""
+        found = []
+        if not self.module:
+            found.append(("module", "missing: the device's file, e.g. 'devices/template.py'"))
+        if not self.class_name:
+            found.append(("class_name", "missing: the device class's name, e.g. 'Template'"))
+        return found
 
 
 class _RobotView:
@@ -262,7 +273,11 @@ def _plain(value: Any) -> Any:
 
 
 class SimmerDevice(Device):
-    """Adapter: a SimMeR device class answering commands as a SimMeR 2 sensor."""
+    """A device class written for the original SimMeR; any other key goes into its info dict.
+
+    See docs/migrating.md. The class is imported from ``module`` and built from its info
+    dictionary on first use; it answers commands as a sensor.
+    """
 
     Params = SimmerDeviceParams
     category: ClassVar[Category] = "sensor"
@@ -270,8 +285,7 @@ class SimmerDevice(Device):
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         super().__init__(device_id, params, rng)
         assert isinstance(params, SimmerDeviceParams)
-        self.loaded = load_module(Path(params.module))
-        self.user_class: type = getattr(self.loaded.module, params.class_name)
+        self.settings = params
         skip = {"type", "module", "class_name", "position", "rotation", "visible", "outline"}
         self.info: dict[str, Any] = {
             "id": device_id,
@@ -284,6 +298,7 @@ class SimmerDevice(Device):
         self.info |= {
             k: _plain(v) for k, v in params.model_dump(exclude_unset=True).items() if k not in skip
         }
+        self.user_class: type | None = None
         self.instance: Any = None
         self.environment: Environment | None = None
         self.broken = False
@@ -291,7 +306,9 @@ class SimmerDevice(Device):
     def _prepare(self, world: World) -> tuple[Any, Environment]:
         """Build the user's object on first use; refresh its global pose and the time."""
         if self.instance is None or self.environment is None:
-            self.loaded.config.__dict__.update(config_values(world))
+            loaded = load_module(Path(self.settings.module))
+            loaded.config.__dict__.update(config_values(world))
+            self.user_class = getattr(loaded.module, self.settings.class_name)
             self.instance = self.user_class(dict(self.info))
             self.environment = Environment(world)
         pose = self.world_pose(world.robot.pose)
@@ -309,7 +326,7 @@ class SimmerDevice(Device):
             return float(answer)
         except (TypeError, ValueError):
             raise CommandError(
-                f"{self.user_class.__name__}.simulate returned {answer!r}, not a number; make it "
+                f"{self.settings.class_name}.simulate returned {answer!r}, not a number; make it "
                 "return a float"
             ) from None
 
@@ -319,14 +336,17 @@ class SimmerDevice(Device):
         An exception is logged once and that device's updates stop, so one faulty device
         cannot stop the simulation.
         """
-        if self.broken or not hasattr(self.user_class, "update"):
+        if self.broken:
             return
         try:
             instance, environment = self._prepare(world)
-            instance.update(environment)
+            if hasattr(instance, "update"):
+                instance.update(environment)
         except Exception:
             self.broken = True
-            log.exception("device %s (%s) failed; its updates stop", self.id, self.user_class)
+            log.exception(
+                "device %s (%s) failed; its updates stop", self.id, self.settings.class_name
+            )
 
 
 register_device_kind(KIND, SimmerDevice)

@@ -21,7 +21,6 @@ from simmer.config.simmer_py import SimmerPy, read_simmer_py
 from simmer.errors import ConfigError, ConfigIssue
 
 MULTILINE = frozenset({"walls"})
-PLUGIN_COMMENTS = {"plugins": 'runs SimMeR-style device classes (type = "simmer_device")'}
 
 
 def convert_simmer_py(path: str | Path, output: str | Path | None = None) -> str:
@@ -89,7 +88,7 @@ def _item(source: SimmerPy, key: str, value: Any) -> Item:
         raise ConfigError(source.path, [ConfigIssue(key, str(exc), source.line_of(key))]) from None
     if key in MULTILINE and isinstance(item, Array):
         item.multiline(True)
-    comment = source.comment_for(key) or PLUGIN_COMMENTS.get(key)
+    comment = source.comment_for(key)
     if comment:
         item.comment(comment)
     return item

@@ -248,8 +248,6 @@ class _Mapper:
                 )
             else:
                 data[group] = self._group(group, table)
-        if any(isinstance(v, dict) and v.get("type") == template.KIND for v in _devices(data)):
-            data["plugins"] = ["simmer.compat.template"]
         if self.issues:
             raise ConfigError(self.result.path, self.issues)
 
@@ -404,10 +402,6 @@ def _dict_entries(node: ast.expr | None) -> dict[str, tuple[ast.expr, ast.expr]]
         for k, v in zip(node.keys, node.values, strict=True)
         if isinstance(k, ast.Constant) and isinstance(k.value, str)
     }
-
-
-def _devices(data: dict[str, Any]) -> list[Any]:
-    return [d for g in DEVICE_GROUPS for d in data.get(g, {}).values()]
 
 
 def _plain(value: Any, inner: Any = None) -> Any:

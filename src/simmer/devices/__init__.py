@@ -34,6 +34,9 @@ register_device_kind("gyroscope", Gyroscope)
 register_device_kind("compass", Compass)
 register_device_kind("infrared", Infrared)
 
+# "simmer_device": a device class written for the original SimMeR (registers itself on import)
+import simmer.compat.template  # noqa: E402, F401
+
 __all__ = [
     "Axes",
     "Circle",
