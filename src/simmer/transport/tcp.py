@@ -13,7 +13,6 @@ import socket
 import threading
 from collections import deque
 from concurrent.futures import Future
-from concurrent.futures import TimeoutError as FutureTimeout
 from concurrent.futures import wait as wait_futures
 
 from simmer.protocol import (
@@ -279,9 +278,35 @@ class StreamServer(_Server):
                 return
 
     def _answer(self, conn: socket.socket, client: str, decoded: Decoded) -> None:
+        """Submit one message and make sure its reply frame goes out.
+
+        The loop thread sends the frame itself as soon as the reply exists (a non-blocking send,
+        no thread hand-off on the reply path: that is most of the latency); whatever the socket
+        could not take at once is sent here. One message is outstanding per connection at a
+        time, so replies stay in order.
+        """
+        unsent: list[bytes] = []
+        handled = threading.Event()
+
+        def send_now(future: Future[list[float]]) -> None:
+            try:
+                if future.exception() is None:
+                    frame = frame_replies(future.result(), self.width)
+                    try:
+                        sent = conn.send(frame, socket.MSG_DONTWAIT)
+                    except BlockingIOError:
+                        sent = 0
+                    unsent.append(frame[sent:])
+            except OSError:  # the client has gone; this thread's next recv notices
+                pass
+            finally:
+                handled.set()
+
         future = self.bus.submit(decoded, client)
-        try:
-            replies = future.result(timeout=self.timeout)
-        except FutureTimeout:
-            raise BusClosed(f"no reply for {client} within {self.timeout} s") from None
-        conn.sendall(frame_replies(replies, self.width))
+        future.add_done_callback(send_now)
+        if not handled.wait(self.timeout):
+            raise BusClosed(f"no reply for {client} within {self.timeout} s")
+        if future.exception() is not None:
+            raise BusClosed("the simulation has stopped")
+        if unsent and unsent[0]:
+            conn.sendall(unsent[0])

@@ -1,0 +1,159 @@
+"""Control-link benchmark: round-trip latency and throughput per transport, and how much faster
+the dead-reckoning program finishes with ``--speed max`` than in real time.
+
+Run standalone: ``.venv/bin/python benchmarks/bench_link.py [--queries N]``. The simulator runs
+in a separate process (as ``simmer run`` would), real time unless stated, so client and server
+do not share an interpreter lock. ``main()`` returns the rows for ``benchmarks/run.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from simmer.client import Client, connect
+from simmer.world import Simulation
+
+SEQUENCE = [
+    ("w0", 36), ("r0", 90), ("w0", 36), ("r0", 90), ("w0", 12),
+    ("r0", -90), ("w0", 24), ("r0", -90), ("w0", 6), ("r0", 720),
+]  # fmt: skip
+SERVER = """
+import json, sys, threading
+from simmer.runner import Runner
+from simmer.transport import Link
+from simmer.world import Simulation
+sim = Simulation.from_config()
+runner = Runner(sim, speed=None if sys.argv[1] == "max" else float(sys.argv[1]))
+ports = {"port_rx": 0, "port_tx": 0, "stream_port": 0}
+with Link(runner.bus, sim.config.settings, serial=True, **ports) as link:
+    print(json.dumps({"stream": link.stream.port, "rx": link.two_port.port_rx,
+                      "tx": link.two_port.port_tx, "serial": link.serial.path}), flush=True)
+    stop = threading.Event()
+    threading.Thread(target=lambda: (sys.stdin.read(), stop.set()), daemon=True).start()
+    runner.run(stop_event=stop)
+    runner.bus.close()
+"""
+
+
+@contextmanager
+def simulator(speed: str = "1") -> Iterator[dict[str, Any]]:
+    """Run a simulator in a child process; yields its ports and serial path."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", SERVER, speed], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+    )
+    assert proc.stdin is not None
+    assert proc.stdout is not None
+    try:
+        yield json.loads(proc.stdout.readline())
+    finally:
+        proc.stdin.close()
+        proc.stdout.close()
+        proc.wait(timeout=10)
+
+
+def clients_for(kind: str, where: dict[str, Any]) -> Callable[[], Client]:
+    """A factory of clients of one transport."""
+    if kind == "persistent":
+        return lambda: connect(port=where["stream"])
+    if kind == "two-port":
+        return lambda: connect(scheme="two-port", port_rx=where["rx"], port_tx=where["tx"])
+    return lambda: connect(serial=where["serial"], timeout=5)
+
+
+def measure(make: Callable[[], Client], clients: int, queries: int) -> dict[str, float]:
+    """``queries`` reads of u0 spread over ``clients`` threads: latency stats and queries/s."""
+    latencies: list[float] = []
+    lock = threading.Lock()
+    barrier = threading.Barrier(clients + 1)
+
+    def worker() -> None:
+        with make() as client:
+            client.read("u0")  # warm up
+            mine = []
+            barrier.wait()
+            for _ in range(queries // clients):
+                start = time.perf_counter()
+                client.read("u0")
+                mine.append(time.perf_counter() - start)
+            with lock:
+                latencies.extend(mine)
+
+    threads = [threading.Thread(target=worker) for _ in range(clients)]
+    for thread in threads:
+        thread.start()
+    barrier.wait()
+    start = time.perf_counter()
+    for thread in threads:
+        thread.join()
+    elapsed = time.perf_counter() - start
+    latencies.sort()
+    return {
+        "median_ms": statistics.median(latencies) * 1e3,
+        "p95_ms": latencies[int(0.95 * (len(latencies) - 1))] * 1e3,
+        "qps": len(latencies) / elapsed,
+    }
+
+
+def dead_reckoning(client: Client) -> None:
+    """The lab sequence, printing nothing: drive, wait, read the four sensors."""
+    for drive, amount in SEQUENCE:
+        if not math.isinf(client.drive(drive, amount)):
+            raise RuntimeError(f"{drive} {amount} refused")
+        client.wait_idle(drive, poll=0.001)
+        client.send("u0,u1,u2,u3")
+
+
+def real_time_duration() -> float:
+    """Simulated seconds the sequence takes: its wall time at ``--speed 1``."""
+    sim = Simulation.from_config()
+    for drive, amount in SEQUENCE:
+        sim.command(f"{drive}-{amount}")
+        sim.run_until_idle()
+    return sim.time
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    """Run every measurement, print a table, return the rows."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--queries", type=int, default=4000, help="queries per measurement")
+    args = parser.parse_args(argv)
+    rows: list[dict[str, Any]] = []
+    with simulator("1") as where:
+        for kind in ("persistent", "two-port", "serial"):
+            for clients in (1, 8):
+                if kind == "serial" and clients > 1:
+                    continue  # one serial port, one program (as on the robot)
+                queries = args.queries if kind != "two-port" else args.queries // 4
+                stats = measure(clients_for(kind, where), clients, queries)
+                rows.append({"transport": kind, "clients": clients, **stats})
+    print(f"{'transport':<11} {'clients':>7} {'median ms':>10} {'p95 ms':>8} {'queries/s':>10}")
+    for row in rows:
+        print(
+            f"{row['transport']:<11} {row['clients']:>7} {row['median_ms']:>10.3f} "
+            f"{row['p95_ms']:>8.3f} {row['qps']:>10.0f}"
+        )
+    real = real_time_duration()
+    with simulator("max") as where, connect(port=where["stream"]) as client:
+        start = time.perf_counter()
+        dead_reckoning(client)
+        fast = time.perf_counter() - start
+    ratio = fast / real
+    print(
+        f"dead reckoning: {real:.1f} s real time, {fast:.2f} s at --speed max (ratio {ratio:.3f})"
+    )
+    rows.append({"transport": "dead-reckoning --speed max", "real_s": real, "max_s": fast})
+    return rows
+
+
+if __name__ == "__main__":
+    main()
