@@ -332,3 +332,33 @@ def test_toml_simmer_device_needs_file_and_class(tmp_path: Path) -> None:
     assert "sensors.t0.module: missing" in text
     assert "sensors.t0.class_name: missing" in text
     assert "sensors.t1.class_name: Value error, beacon.py has no class 'Becon'" in text
+
+
+def test_misspelt_setting_is_reported(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    path = edited(tmp_path, QUIET, "robot_width = 6 ", "robot_widht = 6 ")
+    with caplog.at_level(logging.WARNING, logger="simmer.config.simmer_py"):
+        load_config(path)
+    line = line_of(path, "robot_widht")
+    assert (
+        f"config.py:{line}: 'robot_widht' is not a SimMeR setting (did you mean 'robot_width'?)"
+        in (caplog.text)
+    )
+
+
+def test_syntax_error_in_a_user_device_names_its_file(tmp_path: Path) -> None:
+    shutil.copytree(FIXTURES / "with_device" / "devices", tmp_path / "devices")
+    beacon = tmp_path / "devices" / "beacon.py"
+    text = beacon.read_text(encoding="utf-8")
+    beacon.write_text(text.replace("self.frames = 0", "self.frames = = 0"))
+    path = tmp_path / "config.py"
+    shutil.copy(WITH_DEVICE, path)
+    error = str(error_of(path))
+    assert (
+        f"{path}:{line_of(path, 'from devices.beacon')}: running the configuration failed" in error
+    )
+    assert f"(beacon.py line {line_of(beacon, 'self.frames = = 0')})" in error
+
+
+def test_exit_in_config_is_an_error_not_an_exit(tmp_path: Path) -> None:
+    path = edited(tmp_path, QUIET, "robot_width = 6 ", "import sys; sys.exit(3)\nrobot_width = 6 ")
+    assert f"{path}:{line_of(path, 'sys.exit')}: running" in str(error_of(path))

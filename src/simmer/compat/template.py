@@ -94,6 +94,8 @@ def describe_exception(exc: BaseException, files: list[Path]) -> str:
     """``Type: message (file.py line N)`` naming the innermost frame in one of ``files``."""
     wanted = {f.resolve() for f in files}
     where = ""
+    if isinstance(exc, SyntaxError) and exc.filename and Path(exc.filename).resolve() in wanted:
+        return f"SyntaxError: {exc.msg} ({Path(exc.filename).name} line {exc.lineno})"
     for frame in reversed(traceback.extract_tb(exc.__traceback__)):
         if Path(frame.filename).resolve() in wanted:
             where = f" ({Path(frame.filename).name} line {frame.lineno})"

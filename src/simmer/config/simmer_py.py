@@ -141,7 +141,7 @@ def _run(path: Path, code: types.CodeType, tree: ast.Module) -> dict[str, Any]:
     try:
         with stand_ins:
             exec(code, config.__dict__)
-    except Exception as exc:
+    except (Exception, SystemExit) as exc:
         raise ConfigError(path, [_exception_issue(exc, path, device_dirs)]) from None
     finally:
         for module in stand_ins.user_modules.values():
@@ -149,7 +149,9 @@ def _run(path: Path, code: types.CodeType, tree: ast.Module) -> dict[str, Any]:
     return config.__dict__
 
 
-def _exception_issue(exc: Exception, path: Path, device_dirs: list[Path]) -> ConfigIssue:
+def _exception_issue(
+    exc: Exception | SystemExit, path: Path, device_dirs: list[Path]
+) -> ConfigIssue:
     frames = [f for f in _frames(exc) if Path(f[0]).resolve() == path.resolve()]
     line = frames[-1][1] if frames else None
     user_files = [p for d in device_dirs for p in d.glob("*.py")]
