@@ -103,7 +103,7 @@ def read_simmer_py(path: str | Path) -> SimmerPy:
     except SyntaxError as exc:
         raise ConfigError(path, [_syntax_issue(exc, text)]) from None
     result = SimmerPy(path, {}, comments=_comments(text))
-    namespace = _run(path, code, tree)
+    namespace = _run(path, code)
     _Mapper(result, namespace, tree).map()
     return result
 
@@ -130,7 +130,7 @@ def _syntax_issue(exc: SyntaxError, text: str) -> ConfigIssue:
     return ConfigIssue("", message, line)
 
 
-def _run(path: Path, code: types.CodeType, tree: ast.Module) -> dict[str, Any]:
+def _run(path: Path, code: types.CodeType) -> dict[str, Any]:
     """Execute the configuration with the stand-ins in place and return its globals."""
     config = types.ModuleType("config", "The SimMeR configuration being loaded.")
     config.__file__ = str(path)
