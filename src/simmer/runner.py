@@ -97,13 +97,12 @@ class Runner:
         return replies
 
     def serve(self, timeout: float = 0.0) -> int:
-        """Answer every queued request, waiting up to ``timeout`` s for the first; how many."""
-        request = self.bus.get(timeout)
+        """Answer every queued request, waiting up to ``timeout`` s for one; how many."""
+        self.bus.wait(timeout)
         served = 0
-        while request is not None:
+        while (request := self.bus.get()) is not None:
             self.handle(request)
             served += 1
-            request = self.bus.get(0)
         return served
 
     def run(
@@ -114,7 +113,6 @@ class Runner:
     ) -> None:
         """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``."""
         sim = self.sim
-        bus = self.bus
         next_step = next_frame = time.monotonic()
         while not (stop_event is not None and stop_event.is_set()):
             if until is not None and sim.time >= until - 1e-9:
@@ -134,8 +132,7 @@ class Runner:
                 self.serve(min(wake - now, MAX_WAIT))
                 next_step = time.monotonic()
             elif speed is None or now >= next_step:
-                if bus.pending():
-                    self.serve()
+                self.serve()
                 sim.step()
                 if speed is not None:
                     next_step += sim.dt / speed

@@ -4,17 +4,31 @@ Transport threads never touch a :class:`~simmer.world.Simulation`. They hand eac
 message to a :class:`CommandBus` and get a :class:`~concurrent.futures.Future` of its replies;
 the loop thread (:class:`simmer.runner.Runner`) takes requests off the bus between steps,
 executes them and fulfils the futures.
+
+The loop sleeps in :meth:`CommandBus.wait`, a ``select`` over a wake-up pipe and any sockets a
+transport asked it to :meth:`~CommandBus.watch`. A watched socket's callback runs in the loop
+thread itself, so a transport can read a message and have it executed and answered with no
+thread hand-off at all (the persistent protocol does this: it is where its latency goes).
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import queue
+import selectors
+import socket
 import threading
+import weakref
+from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 
 from simmer.errors import SimmerError
 from simmer.protocol import Decoded
+
+Watcher = Callable[[int], bool]
+"""Called in the loop thread with the ready ``selectors`` events; return False to stop watching."""
 
 
 class BusClosed(SimmerError):
@@ -30,10 +44,18 @@ class Request:
     future: Future[list[float]] = field(default_factory=Future)
 
 
-class CommandBus:
-    """A thread-safe queue of requests, plus the list of connected clients.
+def _release(selector: selectors.BaseSelector, *fds: int) -> None:
+    selector.close()
+    for fd in fds:
+        with contextlib.suppress(OSError):
+            os.close(fd)
 
-    Any thread may :meth:`submit`; only the loop thread may :meth:`get`.
+
+class CommandBus:
+    """A thread-safe queue of requests, the loop's wait, and the list of connected clients.
+
+    Any thread may :meth:`submit`, :meth:`watch` and :meth:`unwatch`; only the loop thread may
+    :meth:`get` and :meth:`wait`.
     """
 
     def __init__(self) -> None:
@@ -41,6 +63,13 @@ class CommandBus:
         self._lock = threading.Lock()
         self._closed = False
         self._clients: dict[str, str] = {}
+        self._selector = selectors.DefaultSelector()
+        self._watch_lock = threading.RLock()
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_r, False)
+        os.set_blocking(self._wake_w, False)
+        self._selector.register(self._wake_r, selectors.EVENT_READ)
+        self._release = weakref.finalize(self, _release, self._selector, self._wake_r, self._wake_w)
 
     def submit(self, message: Decoded | str, client: str) -> Future[list[float]]:
         """Queue a message (text or already-decoded bytes); the future holds its replies."""
@@ -49,28 +78,65 @@ class CommandBus:
         with self._lock:
             if self._closed:
                 request.future.set_exception(BusClosed("the simulation has stopped"))
-            else:
-                self._queue.put(request)
+                return request.future
+            self._queue.put(request)
+            with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
+                os.write(self._wake_w, b"\0")
         return request.future
 
-    def get(self, timeout: float | None = None) -> Request | None:
-        """Next request, waiting up to ``timeout`` seconds (0: don't wait); None if none came."""
+    def get(self) -> Request | None:
+        """The next queued request, or None (never waits)."""
         try:
-            if timeout is not None and timeout <= 0:
-                return self._queue.get_nowait()
-            return self._queue.get(timeout=timeout)
+            return self._queue.get_nowait()
         except queue.Empty:
             return None
 
-    def pending(self) -> bool:
-        """True if a request is waiting (cheap enough to ask between every step)."""
-        return not self._queue.empty()
+    def wait(self, timeout: float) -> None:
+        """Loop thread: sleep until a request arrives or a watched socket is ready (at most
+        ``timeout`` s), running the ready sockets' callbacks."""
+        try:
+            ready = self._selector.select(0.0 if not self._queue.empty() else max(timeout, 0.0))
+        except ValueError:  # closed by another thread meanwhile
+            if self._closed:
+                return
+            raise
+        for key, events in ready:
+            if key.fd == self._wake_r:
+                with contextlib.suppress(BlockingIOError):
+                    while os.read(self._wake_r, 4096):
+                        pass
+                continue
+            with self._watch_lock:
+                if self._closed or self._selector.get_map().get(key.fd) is not key:
+                    continue  # unwatched meanwhile
+                if not key.data(events):
+                    with contextlib.suppress(KeyError, ValueError):  # it may have unwatched
+                        self._selector.unregister(key.fileobj)
+
+    def watch(self, sock: socket.socket, callback: Watcher, events: int) -> None:
+        """Run ``callback(events)`` in the loop thread whenever ``sock`` is ready for ``events``
+        (``selectors.EVENT_READ`` / ``EVENT_WRITE``); calling again changes the events."""
+        with self._watch_lock:
+            if self._closed:
+                raise BusClosed("the simulation has stopped")
+            if sock.fileno() in self._selector.get_map():
+                self._selector.modify(sock, events, callback)
+            else:
+                self._selector.register(sock, events, callback)
+
+    def unwatch(self, sock: socket.socket) -> None:
+        """Stop watching ``sock``; once this returns its callback is not running and won't run."""
+        with self._watch_lock:
+            if not self._closed:
+                with contextlib.suppress(KeyError, ValueError):
+                    self._selector.unregister(sock)
 
     def close(self) -> None:
-        """Refuse new messages and fail the queued ones with :class:`BusClosed`."""
-        with self._lock:
+        """Refuse new messages, fail the queued ones with :class:`BusClosed`, stop watching."""
+        with self._watch_lock, self._lock:  # the order the loop takes them in (no deadlock)
             self._closed = True
-        while (request := self.get(0)) is not None:
+            self._release()
+        while (request := self.get()) is not None:
             request.future.set_exception(BusClosed("the simulation has stopped"))
 
     # --------------------------------------------------------------- clients (for the HUD)

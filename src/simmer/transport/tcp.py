@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import select
+import selectors
 import socket
 import threading
 from collections import deque
@@ -86,18 +87,21 @@ class _Server:
                 except OSError:
                     continue
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                index = self._listeners.index(sock)
-                thread = threading.Thread(
-                    target=self._serve_conn,
-                    args=(conn, f"{addr[0]}:{addr[1]}", index),
-                    name=f"simmer-{self.kind}-{addr[1]}",
-                    daemon=True,
-                )
-                with self._lock:
-                    self._conns.add(conn)
-                    self._threads = [t for t in self._threads if t.is_alive()]
-                    self._threads.append(thread)
-                thread.start()
+                self.accepted(conn, f"{addr[0]}:{addr[1]}", self._listeners.index(sock))
+
+    def accepted(self, conn: socket.socket, peer: str, index: int) -> None:
+        """Serve a new connection: by default in a thread of its own running :meth:`handle`."""
+        thread = threading.Thread(
+            target=self._serve_conn,
+            args=(conn, peer, index),
+            name=f"simmer-{self.kind}-{peer}",
+            daemon=True,
+        )
+        with self._lock:
+            self._conns.add(conn)
+            self._threads = [t for t in self._threads if t.is_alive()]
+            self._threads.append(thread)
+        thread.start()
 
     def _serve_conn(self, conn: socket.socket, peer: str, index: int) -> None:
         try:
@@ -230,7 +234,11 @@ class TwoPortServer(_Server):
 
 class StreamServer(_Server):
     """The persistent protocol: many ``\\n``-terminated messages on one connection, each
-    answered in order with a frame (width byte, uint16 count, packed values)."""
+    answered in order with a frame (width byte, uint16 count, packed values).
+
+    Its connections are not served by threads: the loop thread watches them (see
+    :meth:`CommandBus.watch`), reads a message, executes it and sends the frame in one go.
+    """
 
     kind = "stream"
 
@@ -248,65 +256,125 @@ class StreamServer(_Server):
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
+        self._streams: set[_Stream] = set()
 
-    def handle(self, conn: socket.socket, peer: str, index: int) -> None:
-        """Answer each line in turn until the client closes (or overflows a line)."""
-        client = f"stream {peer}"
-        self.bus.connect(client, self.kind)
+    def accepted(self, conn: socket.socket, peer: str, index: int) -> None:
+        """Hand the connection to the loop thread."""
+        stream = _Stream(self, conn, f"stream {peer}")
+        with self._lock:
+            self._streams.add(stream)
+        self.bus.connect(stream.client, self.kind)
         try:
-            self._serve_lines(conn, client)
-        finally:
-            self.bus.disconnect(client)
+            self.bus.watch(conn, stream.on_ready, selectors.EVENT_READ)
+        except BusClosed:
+            stream.close()
 
-    def _serve_lines(self, conn: socket.socket, client: str) -> None:
-        buffer = bytearray()
-        searched = 0
-        while True:
-            chunk = conn.recv(65536)
-            if not chunk:
-                return
-            buffer += chunk
-            while (end := buffer.find(b"\n", searched)) >= 0:
-                line = bytes(buffer[:end])
-                del buffer[: end + 1]
-                searched = 0
-                self._answer(conn, client, decode_message(line, self.encoding))
-            searched = len(buffer)
-            if len(buffer) > MAX_MESSAGE_BYTES:
-                reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                self._answer(conn, client, Decoded(None, 1, reason))
-                return
+    def forget(self, stream: _Stream) -> None:
+        """A connection has closed."""
+        with self._lock:
+            self._streams.discard(stream)
+        self.bus.disconnect(stream.client)
 
-    def _answer(self, conn: socket.socket, client: str, decoded: Decoded) -> None:
-        """Submit one message and make sure its reply frame goes out.
+    def close(self) -> None:
+        """Stop accepting and close every connection."""
+        super().close()
+        with self._lock:
+            streams = list(self._streams)
+        for stream in streams:
+            stream.close()
 
-        The loop thread sends the frame itself as soon as the reply exists (a non-blocking send,
-        no thread hand-off on the reply path: that is most of the latency); whatever the socket
-        could not take at once is sent here. One message is outstanding per connection at a
-        time, so replies stay in order.
-        """
-        unsent: list[bytes] = []
-        handled = threading.Event()
 
-        def send_now(future: Future[list[float]]) -> None:
+class _Stream:
+    """One persistent-protocol connection, driven by the loop thread (non-blocking socket).
+
+    Replies that the socket cannot take at once wait in ``outbox``; meanwhile the connection
+    is not read (back-pressure on a client that sends but does not read).
+    """
+
+    def __init__(self, server: StreamServer, conn: socket.socket, client: str) -> None:
+        conn.setblocking(False)
+        self.server = server
+        self.conn = conn
+        self.client = client
+        self.inbox = bytearray()
+        self.searched = 0
+        self.outbox = bytearray()
+        self.closing = False
+        self.closed = False
+        self.events = selectors.EVENT_READ
+
+    def on_ready(self, events: int) -> bool:
+        """Loop thread: read and submit whole lines, or flush replies; False once closed."""
+        if events & selectors.EVENT_WRITE:
+            self.flush()
+        elif not self.closing:
             try:
-                if future.exception() is None:
-                    frame = frame_replies(future.result(), self.width)
-                    try:
-                        sent = conn.send(frame, socket.MSG_DONTWAIT)
-                    except BlockingIOError:
-                        sent = 0
-                    unsent.append(frame[sent:])
-            except OSError:  # the client has gone; this thread's next recv notices
-                pass
-            finally:
-                handled.set()
+                chunk = self.conn.recv(65536)
+            except BlockingIOError:
+                return True
+            except OSError:
+                chunk = b""
+            if not chunk:
+                self.close()
+                return False
+            self.inbox += chunk
+            self.submit_lines()
+        return not self.closed
 
-        future = self.bus.submit(decoded, client)
-        future.add_done_callback(send_now)
-        if not handled.wait(self.timeout):
-            raise BusClosed(f"no reply for {client} within {self.timeout} s")
+    def submit_lines(self) -> None:
+        """Submit every complete line; an overlong line gets a NaN and ends the connection."""
+        inbox = self.inbox
+        while (end := inbox.find(b"\n", self.searched)) >= 0:
+            self.submit(decode_message(bytes(inbox[:end]), self.server.encoding))
+            del inbox[: end + 1]
+            self.searched = 0
+        self.searched = len(inbox)
+        if len(inbox) > MAX_MESSAGE_BYTES:
+            reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
+            self.submit(Decoded(None, 1, reason))
+            self.closing = True
+            inbox.clear()
+
+    def submit(self, decoded: Decoded) -> None:
+        """Queue one message; its frame is sent as soon as the loop has answered it."""
+        self.server.bus.submit(decoded, self.client).add_done_callback(self.reply)
+
+    def reply(self, future: Future[list[float]]) -> None:
+        """Loop thread (or a closing bus): send the reply frame, keeping order."""
+        if self.closed:
+            return
         if future.exception() is not None:
-            raise BusClosed("the simulation has stopped")
-        if unsent and unsent[0]:
-            conn.sendall(unsent[0])
+            self.close()
+            return
+        self.outbox += frame_replies(future.result(), self.server.width)
+        self.flush()
+
+    def flush(self) -> None:
+        """Send what the socket takes now; watch for writability while anything is left."""
+        try:
+            sent = self.conn.send(self.outbox) if self.outbox else 0
+        except BlockingIOError:
+            sent = 0
+        except OSError:  # the client has gone
+            self.close()
+            return
+        del self.outbox[:sent]
+        if not self.outbox and self.closing:
+            self.close()
+            return
+        events = selectors.EVENT_WRITE if self.outbox else selectors.EVENT_READ
+        if events != self.events:
+            self.events = events
+            try:
+                self.server.bus.watch(self.conn, self.on_ready, events)
+            except BusClosed:
+                self.close()
+
+    def close(self) -> None:
+        """Stop watching and close the socket (any thread)."""
+        if self.closed:
+            return
+        self.closed = True
+        self.server.bus.unwatch(self.conn)
+        self.conn.close()
+        self.server.forget(self)
