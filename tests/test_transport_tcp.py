@@ -199,3 +199,15 @@ def test_fifty_clients_at_once_each_get_their_own_reply() -> None:
         with ThreadPoolExecutor(50) as pool:
             results = list(pool.map(one, range(50)))
     assert len(results) == 50
+
+
+def test_stream_client_that_sends_much_before_reading_gets_every_reply_in_order() -> None:
+    count = 20000
+    with serving() as (_, link), stream(link.stream.port) as sock:
+        sender = threading.Thread(target=sock.sendall, args=(b"u1\nu0,u1\n" * (count // 2),))
+        sender.start()  # replies pile up while the client is still writing: back-pressure
+        time.sleep(0.2)
+        replies = [read_frame(sock) for _ in range(count)]
+        sender.join()
+    assert [len(r) for r in replies[:4]] == [1, 2, 1, 2]
+    assert all(r[-1] == pytest.approx(3.5) for r in replies)

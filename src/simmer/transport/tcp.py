@@ -1,7 +1,9 @@
 """TCP transports: SimMeR's two-port scheme and the persistent stream protocol.
 
-Each accepted connection gets its own thread, so an idle or slow client never holds up the
-others; the threads only read, decode and wait on the :class:`CommandBus` (docs/protocol.md).
+A two-port connection gets a thread of its own, so an idle or slow client never holds up the
+others; the thread only reads, decodes and waits on the :class:`CommandBus`. Persistent
+connections are watched by the loop thread itself (non-blocking sockets), which reads a line,
+executes it and sends the reply frame with no thread hand-off (docs/protocol.md).
 """
 
 from __future__ import annotations
