@@ -72,7 +72,7 @@ def keys(
 @app.command()
 def run(
     config: ConfigArg = None,
-    headless: Annotated[bool, typer.Option(help="Run without a window.")] = True,
+    headless: Annotated[bool, typer.Option(help="Run without a window.")] = False,
     seconds: Annotated[
         float | None, typer.Option(help="Stop after this many simulated seconds.")
     ] = None,
@@ -114,6 +114,18 @@ def run(
         _report_config_error(exc)
         raise typer.Exit(1) from None
     out.print(summarize(sim.config), markup=False)
+    if not headless:
+        from simmer.errors import SimmerError
+        from simmer.runner import Runner
+        from simmer.ui import run_window
+
+        out.print(f"noise seed {sim.seed}; window open (press h for help)", markup=False)
+        try:
+            run_window(Runner(sim))
+        except SimmerError as exc:
+            err.print(f"[bold red]{exc}[/]")
+            raise typer.Exit(1) from None
+        return
     from simmer.serve import run_headless
 
     out.print(f"noise seed {sim.seed}", markup=False)

@@ -15,7 +15,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 from simmer.ui.hud import Stopwatch
 from simmer.ui.render import PygameRenderer, RecordingRenderer, Renderer
 from simmer.ui.scene import ScenePainter, View
-from simmer.ui.window import Window, render_scene
+from simmer.ui.window import Window, render_scene, run_window
 
 __all__ = [
     "PygameRenderer",
@@ -26,4 +26,5 @@ __all__ = [
     "View",
     "Window",
     "render_scene",
+    "run_window",
 ]

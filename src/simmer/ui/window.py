@@ -9,15 +9,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import pygame
 
+from simmer.errors import SimmerError
 from simmer.geometry import FloatArray, Pose, point_in_polygon
 from simmer.ui.hud import CommandLog, Stopwatch, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.world import Simulation
+
+if TYPE_CHECKING:
+    from simmer.runner import Runner
 
 SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
 """The speed factors ``+`` and ``-`` step through."""
@@ -288,3 +292,20 @@ def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surf
     if path is not None:
         pygame.image.save(surface, str(path))
     return surface
+
+
+def run_window(runner: Runner) -> None:
+    """Open a window on the runner's simulation and run until the user quits.
+
+    Raises :class:`~simmer.errors.SimmerError` if no window can be opened (no display).
+    """
+    try:
+        window = Window(runner.sim)
+    except pygame.error as exc:
+        raise SimmerError(f"cannot open a window ({exc}); use --headless") from None
+    try:
+        runner.run(on_frame=window.frame)
+    except KeyboardInterrupt:  # Ctrl-C in the terminal: close quietly, like Esc
+        pass
+    finally:
+        window.close()
