@@ -12,6 +12,7 @@ import argparse
 import math
 
 from simmer.client import connect
+from simmer.errors import ClientError
 
 SEQUENCE = [
     ("w0", 36), ("r0", 90), ("w0", 36), ("r0", 90), ("w0", 12),
@@ -46,4 +47,7 @@ def main(argv: list[str] | None = None) -> list[list[float]]:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except ClientError as exc:  # e.g. the simulator is not running
+        raise SystemExit(f"error: {exc}") from None

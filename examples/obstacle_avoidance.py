@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from simmer.client import connect
+from simmer.errors import ClientError
 
 SENSORS = "u0,u1,u2,u3"
 LIMIT = 2.0  # in
@@ -38,4 +39,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except ClientError as exc:  # e.g. the simulator is not running
+        raise SystemExit(f"error: {exc}") from None
