@@ -14,7 +14,7 @@ import pytest
 
 from simmer import Simulation
 from simmer.runner import Runner
-from simmer.ui import Window
+from simmer.ui import Window, run_window
 from simmer.ui.hud import Stopwatch
 from simmer.ui.window import LocalControls, faster, slower
 
@@ -244,3 +244,11 @@ def test_stopwatch_times_the_trip_to_the_block(caplog: pytest.LogCaptureFixture)
     assert watch.elapsed() == elapsed  # frozen once stopped
     sim.reset()
     assert watch.elapsed() is None
+
+
+def test_run_window_quits_on_escape() -> None:
+    sim = Simulation.from_config()
+    pygame.display.init()
+    key(pygame.K_ESCAPE)
+    run_window(Runner(sim, speed=None))
+    assert not sim.observers  # the window let go of the simulation

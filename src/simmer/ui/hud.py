@@ -135,7 +135,8 @@ LABEL_X = 160
 VALUE_X = 320
 ROWS = (10, 36, 62, 88)
 COMMANDS_X = 700
-CLIENTS_X = 1200
+CLIENTS_X = 1160
+LEGEND_WIDTH = 190
 
 
 def _key_cap(r: Renderer, key: str, lit: bool) -> None:
@@ -145,10 +146,31 @@ def _key_cap(r: Renderer, key: str, lit: bool) -> None:
     r.draw_text(key.upper(), (x + 8, y + 6), (0, 0, 0) if lit else TEXT, 20)
 
 
-def paint_hud_static(r: Renderer) -> None:
-    """The HUD's fixed parts: unlit key caps and labels (painted once, into the static layer)."""
+def legend(sim: Simulation) -> list[tuple[Color, str]]:
+    """What the scene's colours mean."""
+    settings = sim.config.settings
+    items = [
+        (settings.wall_color, "wall"),
+        (settings.block_color, "block (the target)"),
+        (settings.robot_color, "robot, devices"),
+    ]
+    for device in sim.robot.devices.values():
+        color = getattr(device.params, "ray_color", None)
+        if color is not None:
+            items.append((color, "ultrasonic rays"))
+            break
+    return items
+
+
+def paint_hud_static(r: Renderer, sim: Simulation, width: int) -> None:
+    """The HUD's fixed parts: unlit key caps, labels, colour legend (painted once)."""
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
+    x = width - LEGEND_WIDTH
+    for i, (color, label) in enumerate(legend(sim)):
+        y = 12 + 22 * i
+        r.draw_rect((x, y + 2, 14, 14), color)
+        r.draw_text(label, (x + 22, y), TEXT, 20)
     r.draw_text("h: help", (12, 78), DIM, 20)
     for label, y in zip(("time", "Task 2 stopwatch", "true pose", "collisions"), ROWS, strict=True):
         r.draw_text(label, (LABEL_X, y), DIM, 22)

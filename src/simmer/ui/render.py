@@ -41,8 +41,10 @@ class Renderer(Protocol):
         """A circle; ``width`` 0 fills it."""
         ...
 
-    def draw_text(self, text: str, pos: Point, color: Color, size: int) -> None:
-        """One line of text with its top-left corner at ``pos``; ``size`` in pixels."""
+    def draw_text(
+        self, text: str, pos: Point, color: Color, size: int, centered: bool = False
+    ) -> None:
+        """One line of text with its top-left corner (or centre) at ``pos``; ``size`` in px."""
         ...
 
 
@@ -84,9 +86,11 @@ class RecordingRenderer:
         """Record a circle."""
         self.calls.append(DrawCall("circle", (center, radius, color, width)))
 
-    def draw_text(self, text: str, pos: Point, color: Color, size: int) -> None:
+    def draw_text(
+        self, text: str, pos: Point, color: Color, size: int, centered: bool = False
+    ) -> None:
         """Record a line of text."""
-        self.calls.append(DrawCall("text", (text, pos, color, size)))
+        self.calls.append(DrawCall("text", (text, pos, color, size, centered)))
 
 
 class TextCache:
@@ -147,9 +151,14 @@ class PygameRenderer:
         """A circle; ``width`` 0 fills it."""
         self.dirty.append(pygame.draw.circle(self.surface, color, center, radius, width))
 
-    def draw_text(self, text: str, pos: Point, color: Color, size: int) -> None:
+    def draw_text(
+        self, text: str, pos: Point, color: Color, size: int, centered: bool = False
+    ) -> None:
         """One line of text (cached, so an unchanged line costs one blit)."""
-        self.dirty.append(self.surface.blit(self.text.get(text, color, size), pos))
+        image = self.text.get(text, color, size)
+        if centered:
+            pos = (pos[0] - image.get_width() / 2, pos[1] - image.get_height() / 2)
+        self.dirty.append(self.surface.blit(image, pos))
 
 
 def merge_rects(rects: Sequence[pygame.Rect]) -> list[pygame.Rect]:

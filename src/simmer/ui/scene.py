@@ -84,8 +84,8 @@ def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
 
 @dataclass
 class RobotShape:
-    """Robot outline, heading mark and visible device outlines stacked in one robot-frame array,
-    so a frame places them all with one call."""
+    """Robot outline, heading mark, visible device outlines and sensor-id anchors stacked in one
+    robot-frame array, so a frame places them all with one call."""
 
     robot: Robot
     local: FloatArray
@@ -94,11 +94,13 @@ class RobotShape:
     """Points ``[0, body)`` are the outline; the next two are the heading mark."""
     devices: list[tuple[int, int, Color]]
     """(start, stop, colour) of each visible device's outline."""
+    labels: list[tuple[int, str, Color]]
+    """(point, id, colour): where to write each off-centre visible sensor's id."""
 
     @classmethod
     def of(cls, robot: Robot) -> RobotShape:
         """Stack a robot's shapes."""
-        reach = 0.45 * float(np.min(np.abs(robot.outline).max(axis=0)))
+        reach = 0.3 * float(np.min(np.abs(robot.outline).max(axis=0)))
         pieces = [robot.outline, np.array([[0.0, 0.0], [0.0, reach]])]
         devices = []
         start = len(robot.outline) + 2
@@ -110,8 +112,15 @@ class RobotShape:
                 pieces.append(placed)
                 devices.append((start, start + len(placed), device.params.color))
                 start += len(placed)
+        labels = []
+        for device in robot.sensors.values():
+            x, y = device.position
+            if device.visible and math.hypot(x, y) > 0.5:
+                pieces.append(np.array([[0.55 * x, 0.55 * y]]))  # inside the body, toward it
+                labels.append((start, device.id, device.params.color))
+                start += 1
         local = np.concatenate(pieces)
-        return cls(robot, local, np.empty_like(local), len(robot.outline), devices)
+        return cls(robot, local, np.empty_like(local), len(robot.outline), devices, labels)
 
 
 class ScenePainter:
@@ -165,7 +174,8 @@ class ScenePainter:
         maze = self.sim.maze
         for c in range(maze.cols + 1):
             x, y = view.point(c * maze.cell, 0)
-            r.draw_text(f"{c * maze.cell:g}", (x + 2, y - size), RULER_COLOR, size)
+            label = f"{c * maze.cell:g}" + (" in" if c == 0 else "")
+            r.draw_text(label, (x + 2, y - size), RULER_COLOR, size)
         for row in range(1, maze.rows + 1):
             x, y = view.point(0, row * maze.cell)
             r.draw_text(f"{row * maze.cell:g}", (x - border, y - size), RULER_COLOR, size)
@@ -198,10 +208,16 @@ class ScenePainter:
         r.draw_segment(points[stack.body], points[stack.body + 1], settings.robot_color, thickness)
         for start, stop, color in stack.devices:
             r.draw_polygon(points[start:stop], color, 2)
+        label_size = max(10, round(view.ppi * 0.9))
+        for index, text, color in stack.labels:
+            r.draw_text(text, points[index], color, label_size, centered=True)
+        line = max(1, round(view.ppi / 8))  # 2 px at the default 16 ppi: visible on white tiles
         for device in robot.devices.values():
             for shape in device.shapes(sim):
                 if isinstance(shape, Segment):
-                    r.draw_segment(view.point(*shape.start), view.point(*shape.end), shape.color)
+                    r.draw_segment(
+                        view.point(*shape.start), view.point(*shape.end), shape.color, line
+                    )
                 elif isinstance(shape, Circle):
                     r.draw_circle(
                         view.point(*shape.center), shape.radius * view.ppi, shape.color, 2

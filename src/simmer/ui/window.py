@@ -132,7 +132,7 @@ class Window:
         self.static = pygame.Surface(size).convert() if self._own_display else pygame.Surface(size)
         static = PygameRenderer(self.static, self.text)
         self.painter.paint_static(static, self.view, size)
-        paint_hud_static(static)
+        paint_hud_static(static, self.sim, size[0])
         self._drawn = [self.static.get_rect()]
 
     # ----------------------------------------------------------------- the frame hook
