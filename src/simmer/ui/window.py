@@ -162,7 +162,8 @@ class Window:
         screen = self.screen
         static = self.static
         previous = self._drawn
-        if len(previous) == 1 and previous[0] == static.get_rect():
+        everything = previous == [static.get_rect()]
+        if everything:
             screen.blit(static, (0, 0))
         else:
             for rect in previous:
@@ -184,7 +185,7 @@ class Window:
         if self.show_help:
             paint_help(r, screen.get_size())
         self._drawn = merge_rects(r.dirty)
-        self._updated = None if previous[0] == static.get_rect() else previous + self._drawn
+        self._updated = None if everything else previous + self._drawn
 
     # ----------------------------------------------------------------- events
 
