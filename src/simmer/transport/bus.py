@@ -84,6 +84,11 @@ class CommandBus:
                 os.write(self._wake_w, b"\0")
         return request.future
 
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`close` has been called."""
+        return self._closed
+
     def get(self) -> Request | None:
         """The next queued request, or None (never waits)."""
         try:

@@ -52,13 +52,10 @@ class Link:
             settings.port_tx if port_tx is None else port_tx,
             width=width,
             encoding=encoding,
-            timeout=timeout,
         )
         self.serial: SerialServer | None = None
         try:
-            self.stream = StreamServer(
-                bus, self.host, stream_port, width=width, encoding=encoding, timeout=timeout
-            )
+            self.stream = StreamServer(bus, self.host, stream_port, width=width, encoding=encoding)
             if serial or serial_link is not None:
                 self.serial = SerialServer(
                     bus, serial_link, width=width, encoding=encoding, timeout=timeout

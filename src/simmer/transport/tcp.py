@@ -1,22 +1,20 @@
 """TCP transports: SimMeR's two-port scheme and the persistent stream protocol.
 
-A two-port connection gets a thread of its own, so an idle or slow client never holds up the
-others; the thread only reads, decodes and waits on the :class:`CommandBus`. Persistent
-connections are watched by the loop thread itself (non-blocking sockets), which reads a line,
-executes it and sends the reply frame with no thread hand-off (docs/protocol.md).
+No thread of their own: every socket (listening or connected) is non-blocking and watched by the
+loop thread through :meth:`CommandBus.watch`. The loop accepts, reads a message, executes it and
+sends the reply in one go, so a reply costs no thread hand-off (that is where a threaded server's
+latency goes), and an idle or slow client holds nothing up: it is just a socket nobody reads.
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
-import select
 import selectors
 import socket
 import threading
 from collections import deque
+from collections.abc import Callable
 from concurrent.futures import Future
-from concurrent.futures import wait as wait_futures
 
 from simmer.protocol import (
     MAX_MESSAGE_BYTES,
@@ -29,330 +27,56 @@ from simmer.transport.bus import BusClosed, CommandBus
 
 log = logging.getLogger("simmer.transport")
 
-POLL = 0.05
-"""How often a waiting reply connection checks whether its client hung up (seconds)."""
 STREAM_PORT = 61202
 """Default port of the persistent stream protocol."""
+READ = selectors.EVENT_READ
+WRITE = selectors.EVENT_WRITE
 
 
-def _listen(host: str, port: int) -> socket.socket:
-    """A listening TCP socket (port 0: any free port)."""
-    return socket.create_server((host, port), reuse_port=False, backlog=128)
+class _Connection:
+    """One accepted, non-blocking connection driven by the loop thread, with an outbox for
+    what the socket cannot take at once (meanwhile it is not read: back-pressure)."""
 
-
-def _hung_up(conn: socket.socket) -> bool:
-    """True if the peer has closed its end (readable with no data); discards stray input."""
-    try:
-        readable, _, _ = select.select([conn], [], [], 0)
-        if not readable:
-            return False
-        return conn.recv(4096) == b""
-    except OSError:
-        return True
-
-
-class _Server:
-    """A listening socket, an accept thread and one thread per connection; closes cleanly."""
-
-    kind = "tcp"
-
-    def __init__(self, bus: CommandBus, host: str, ports: list[int], timeout: float) -> None:
-        self.bus = bus
-        self.timeout = timeout
-        self._stopping = threading.Event()
-        self._lock = threading.Lock()
-        self._conns: set[socket.socket] = set()
-        self._threads: list[threading.Thread] = []
-        self._wake_r, self._wake_w = socket.socketpair()
-        self._listeners: list[socket.socket] = []
-        try:
-            for port in ports:
-                self._listeners.append(_listen(host, port))
-        except OSError:
-            self._close_sockets()
-            raise
-        self.ports = [sock.getsockname()[1] for sock in self._listeners]
-        self._accepter = threading.Thread(target=self._accept_loop, name=f"simmer-{self.kind}")
-
-    def start(self) -> None:
-        """Start accepting connections."""
-        self._accepter.start()
-
-    def _accept_loop(self) -> None:
-        while not self._stopping.is_set():
-            readable, _, _ = select.select([*self._listeners, self._wake_r], [], [])
-            for sock in readable:
-                if sock is self._wake_r:
-                    return
-                try:
-                    conn, addr = sock.accept()
-                except OSError:
-                    continue
-                conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                self.accepted(conn, f"{addr[0]}:{addr[1]}", self._listeners.index(sock))
-
-    def accepted(self, conn: socket.socket, peer: str, index: int) -> None:
-        """Serve a new connection: by default in a thread of its own running :meth:`handle`."""
-        thread = threading.Thread(
-            target=self._serve_conn,
-            args=(conn, peer, index),
-            name=f"simmer-{self.kind}-{peer}",
-            daemon=True,
-        )
-        with self._lock:
-            self._conns.add(conn)
-            self._threads = [t for t in self._threads if t.is_alive()]
-            self._threads.append(thread)
-        thread.start()
-
-    def _serve_conn(self, conn: socket.socket, peer: str, index: int) -> None:
-        try:
-            self.handle(conn, peer, index)
-        except BusClosed:
-            pass
-        except OSError as exc:
-            if not self._stopping.is_set():
-                log.info("%s client %s: connection lost (%s)", self.kind, peer, exc)
-        finally:
-            with self._lock:
-                self._conns.discard(conn)
-            conn.close()
-
-    def handle(self, conn: socket.socket, peer: str, index: int) -> None:
-        """Serve one connection accepted on listener ``index`` (subclasses)."""
-        raise NotImplementedError
-
-    def close(self) -> None:
-        """Stop accepting, drop open connections and wait for the threads."""
-        if self._stopping.is_set():
-            return
-        self._stopping.set()
-        self._wake_w.send(b"x")
-        if self._accepter.is_alive():
-            self._accepter.join()
-        with self._lock:
-            conns = list(self._conns)
-            threads = list(self._threads)
-        for conn in conns:
-            with contextlib.suppress(OSError):
-                conn.shutdown(socket.SHUT_RDWR)
-        for thread in threads:
-            thread.join(timeout=2 * POLL + 1.0)
-        self._close_sockets()
-
-    def _close_sockets(self) -> None:
-        for sock in self._listeners:
-            sock.close()
-        self._wake_r.close()
-        self._wake_w.close()
-
-    def __enter__(self) -> _Server:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-class TwoPortServer(_Server):
-    """SimMeR's scheme: a message arrives on ``port_rx`` (read until the client closes); its
-    reply leaves on the next connection to ``port_tx`` once it is ready, then that connection
-    is closed. Replies go out in the order messages arrived; a reply whose connection hangs up
-    before it is sent is kept for the next one, so no reply is lost or doubled."""
-
-    kind = "two-port"
-
-    def __init__(
-        self,
-        bus: CommandBus,
-        host: str = "127.0.0.1",
-        port_rx: int = 61200,
-        port_tx: int = 61201,
-        *,
-        width: int = 4,
-        encoding: str = "utf-8",
-        timeout: float = 300.0,
-    ) -> None:
-        super().__init__(bus, host, [port_rx, port_tx], timeout)
-        self.port_rx, self.port_tx = self.ports
-        self.width = width
-        self.encoding = encoding
-        self._pending: deque[Future[list[float]]] = deque()
-        self._ready = threading.Condition()
-
-    def handle(self, conn: socket.socket, peer: str, index: int) -> None:
-        """Port_rx: read one message; port_tx: send the oldest unsent reply."""
-        if index == 0:
-            self._receive(conn, peer)
-        else:
-            self._reply(conn, peer)
-
-    def _receive(self, conn: socket.socket, peer: str) -> None:
-        conn.settimeout(self.timeout)
-        data = bytearray()
-        try:
-            while len(data) <= MAX_MESSAGE_BYTES:
-                chunk = conn.recv(65536)
-                if not chunk:
-                    break
-                data += chunk
-        except TimeoutError:
-            log.warning("two-port client %s sent no end of message for %g s", peer, self.timeout)
-            return
-        if not data:
-            log.debug("two-port client %s connected and sent nothing: no message", peer)
-            return
-        decoded = decode_message(bytes(data), self.encoding)
-        with self._ready:
-            self._pending.append(self.bus.submit(decoded, f"two-port {peer}"))
-            self._ready.notify()
-
-    def _reply(self, conn: socket.socket, peer: str) -> None:
-        future = self._claim(conn)
-        if future is None:
-            return
-        try:
-            while not wait_futures([future], timeout=POLL).done:
-                if _hung_up(conn) or self._stopping.is_set():
-                    raise ConnectionAbortedError("client hung up before its reply was ready")
-            conn.sendall(pack_replies(future.result(), self.width))
-        except OSError:
-            with self._ready:
-                self._pending.appendleft(future)
-                self._ready.notify()
-            log.info("two-port client %s left before its reply; kept for the next one", peer)
-
-    def _claim(self, conn: socket.socket) -> Future[list[float]] | None:
-        """Wait (up to the timeout) for the oldest unclaimed reply; None if none or hung up."""
-        waited = 0.0
-        with self._ready:
-            while not self._pending:
-                if waited >= self.timeout or self._stopping.is_set() or _hung_up(conn):
-                    return None
-                self._ready.wait(POLL)
-                waited += POLL
-            return self._pending.popleft()
-
-
-class StreamServer(_Server):
-    """The persistent protocol: many ``\\n``-terminated messages on one connection, each
-    answered in order with a frame (width byte, uint16 count, packed values).
-
-    Its connections are not served by threads: the loop thread watches them (see
-    :meth:`CommandBus.watch`), reads a message, executes it and sends the frame in one go.
-    """
-
-    kind = "stream"
-
-    def __init__(
-        self,
-        bus: CommandBus,
-        host: str = "127.0.0.1",
-        port: int = STREAM_PORT,
-        *,
-        width: int = 4,
-        encoding: str = "utf-8",
-        timeout: float = 300.0,
-    ) -> None:
-        super().__init__(bus, host, [port], timeout)
-        self.port = self.ports[0]
-        self.width = width
-        self.encoding = encoding
-        self._streams: set[_Stream] = set()
-
-    def accepted(self, conn: socket.socket, peer: str, index: int) -> None:
-        """Hand the connection to the loop thread."""
-        stream = _Stream(self, conn, f"stream {peer}")
-        with self._lock:
-            self._streams.add(stream)
-        self.bus.connect(stream.client, self.kind)
-        try:
-            self.bus.watch(conn, stream.on_ready, selectors.EVENT_READ)
-        except BusClosed:
-            stream.close()
-
-    def forget(self, stream: _Stream) -> None:
-        """A connection has closed."""
-        with self._lock:
-            self._streams.discard(stream)
-        self.bus.disconnect(stream.client)
-
-    def close(self) -> None:
-        """Stop accepting and close every connection."""
-        super().close()
-        with self._lock:
-            streams = list(self._streams)
-        for stream in streams:
-            stream.close()
-
-
-class _Stream:
-    """One persistent-protocol connection, driven by the loop thread (non-blocking socket).
-
-    Replies that the socket cannot take at once wait in ``outbox``; meanwhile the connection
-    is not read (back-pressure on a client that sends but does not read).
-    """
-
-    def __init__(self, server: StreamServer, conn: socket.socket, client: str) -> None:
+    def __init__(self, server: _Server, conn: socket.socket, client: str) -> None:
         conn.setblocking(False)
         self.server = server
         self.conn = conn
         self.client = client
-        self.inbox = bytearray()
-        self.searched = 0
         self.outbox = bytearray()
-        self.closing = False
+        self.close_when_sent = False
         self.closed = False
-        self.events = selectors.EVENT_READ
+        self.events = READ
 
     def on_ready(self, events: int) -> bool:
-        """Loop thread: read and submit whole lines, or flush replies; False once closed."""
-        if events & selectors.EVENT_WRITE:
+        """Loop thread: flush, or read what arrived; False once closed."""
+        if events & WRITE:
             self.flush()
-        elif not self.closing:
-            try:
-                chunk = self.conn.recv(65536)
-            except BlockingIOError:
-                return True
-            except OSError:
-                chunk = b""
-            if not chunk:
-                self.close()
-                return False
-            self.inbox += chunk
-            self.submit_lines()
+            return not self.closed
+        try:
+            chunk = self.conn.recv(65536)
+        except BlockingIOError:
+            return True
+        except OSError:
+            chunk = b""
+        self.received(chunk)
         return not self.closed
 
-    def submit_lines(self) -> None:
-        """Submit every complete line; an overlong line gets a NaN and ends the connection."""
-        inbox = self.inbox
-        while (end := inbox.find(b"\n", self.searched)) >= 0:
-            self.submit(decode_message(bytes(inbox[:end]), self.server.encoding))
-            del inbox[: end + 1]
-            self.searched = 0
-        self.searched = len(inbox)
-        if len(inbox) > MAX_MESSAGE_BYTES:
-            reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-            self.submit(Decoded(None, 1, reason))
-            self.closing = True
-            inbox.clear()
+    def opened(self) -> None:
+        """Called once the loop watches the connection (subclasses may start work here)."""
 
-    def submit(self, decoded: Decoded) -> None:
-        """Queue one message; its frame is sent as soon as the loop has answered it."""
-        self.server.bus.submit(decoded, self.client).add_done_callback(self.reply)
+    def received(self, chunk: bytes) -> None:
+        """Handle received bytes (``b""``: the client closed its end)."""
+        raise NotImplementedError
 
-    def reply(self, future: Future[list[float]]) -> None:
-        """Loop thread (or a closing bus): send the reply frame, keeping order."""
-        if self.closed:
-            return
-        if future.exception() is not None:
-            self.close()
-            return
-        self.outbox += frame_replies(future.result(), self.server.width)
+    def send(self, data: bytes) -> None:
+        """Queue bytes and send what the socket takes now."""
+        self.outbox += data
         self.flush()
 
     def flush(self) -> None:
-        """Send what the socket takes now; watch for writability while anything is left."""
+        """Send what the socket takes; watch for writability while anything is left."""
+        if self.closed:
+            return
         try:
             sent = self.conn.send(self.outbox) if self.outbox else 0
         except BlockingIOError:
@@ -361,10 +85,10 @@ class _Stream:
             self.close()
             return
         del self.outbox[:sent]
-        if not self.outbox and self.closing:
+        if not self.outbox and self.close_when_sent:
             self.close()
             return
-        events = selectors.EVENT_WRITE if self.outbox else selectors.EVENT_READ
+        events = WRITE if self.outbox else READ
         if events != self.events:
             self.events = events
             try:
@@ -380,3 +104,269 @@ class _Stream:
         self.server.bus.unwatch(self.conn)
         self.conn.close()
         self.server.forget(self)
+
+
+class _Server:
+    """Listening sockets watched by the loop; tracks connections so :meth:`close` is clean."""
+
+    kind = "tcp"
+
+    def __init__(self, bus: CommandBus, host: str, ports: list[int]) -> None:
+        self.bus = bus
+        self._lock = threading.Lock()
+        self._connections: set[_Connection] = set()
+        self._listeners: list[socket.socket] = []
+        self._closed = False
+        try:
+            for port in ports:
+                listener = socket.create_server((host, port), backlog=128)
+                listener.setblocking(False)
+                self._listeners.append(listener)
+        except OSError:
+            self.close()
+            raise
+        self.ports = [sock.getsockname()[1] for sock in self._listeners]
+
+    def start(self) -> None:
+        """Start accepting connections (the loop must be running to serve them)."""
+        for index, listener in enumerate(self._listeners):
+            self.bus.watch(listener, self._acceptor(index), READ)
+
+    def _acceptor(self, index: int) -> Callable[[int], bool]:
+        return lambda _events: self._accept(index)
+
+    def _accept(self, index: int) -> bool:
+        try:
+            conn, addr = self._listeners[index].accept()
+        except BlockingIOError:
+            return True
+        except OSError as exc:
+            log.warning("%s: accept failed: %s", self.kind, exc)
+            return True
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        connection = self.connection(conn, f"{addr[0]}:{addr[1]}", index)
+        with self._lock:
+            self._connections.add(connection)
+        try:
+            self.bus.watch(conn, connection.on_ready, READ)
+        except BusClosed:
+            connection.close()
+            return False
+        connection.opened()
+        return True
+
+    def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
+        """The handler of a connection accepted on listener ``index`` (subclasses)."""
+        raise NotImplementedError
+
+    def forget(self, connection: _Connection) -> None:
+        """A connection has closed."""
+        with self._lock:
+            self._connections.discard(connection)
+
+    def close(self) -> None:
+        """Stop accepting and close every connection."""
+        if self._closed:
+            return
+        self._closed = True
+        for listener in self._listeners:
+            self.bus.unwatch(listener)
+            listener.close()
+        with self._lock:
+            connections = list(self._connections)
+        for connection in connections:
+            connection.close()
+
+    def __enter__(self) -> _Server:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class TwoPortServer(_Server):
+    """SimMeR's scheme: a message arrives on ``port_rx`` (everything until the client closes);
+    its reply leaves on the next connection to ``port_tx`` once it is ready, then that
+    connection is closed. Replies go out in the order messages arrived; a reply connection that
+    hangs up before its reply is sent does not consume it, so no reply is lost or doubled."""
+
+    kind = "two-port"
+
+    def __init__(
+        self,
+        bus: CommandBus,
+        host: str = "127.0.0.1",
+        port_rx: int = 61200,
+        port_tx: int = 61201,
+        *,
+        width: int = 4,
+        encoding: str = "utf-8",
+    ) -> None:
+        super().__init__(bus, host, [port_rx, port_tx])
+        self.port_rx, self.port_tx = self.ports
+        self.width = width
+        self.encoding = encoding
+        self.unclaimed: deque[Future[list[float]]] = deque()  # replies nobody has asked for yet
+        self.waiting: deque[_ReplyConnection] = deque()  # reply connections with no reply yet
+
+    def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
+        """A message connection (port_rx) or a reply connection (port_tx)."""
+        if index == 0:
+            return _MessageConnection(self, conn, f"two-port {peer}")
+        return _ReplyConnection(self, conn, f"two-port {peer}")
+
+    def match(self) -> None:
+        """Loop thread: give the oldest unclaimed replies to the oldest waiting connections."""
+        while self.unclaimed and self.waiting:
+            self.waiting.popleft().claim(self.unclaimed.popleft())
+
+
+class _MessageConnection(_Connection):
+    """Two-port ``port_rx``: collect the message until the client closes, then submit it."""
+
+    def __init__(self, server: TwoPortServer, conn: socket.socket, client: str) -> None:
+        super().__init__(server, conn, client)
+        self.two_port = server
+        self.data = bytearray()
+
+    def received(self, chunk: bytes) -> None:
+        """Collect; at the end (or past the size limit) submit the message and close."""
+        self.data += chunk
+        if chunk and len(self.data) <= MAX_MESSAGE_BYTES:
+            return
+        self.close()
+        if not self.data:
+            log.debug("%s connected and sent nothing: no message", self.client)
+            return
+        decoded = decode_message(bytes(self.data), self.two_port.encoding)
+        self.two_port.unclaimed.append(self.server.bus.submit(decoded, self.client))
+        self.two_port.match()
+
+
+class _ReplyConnection(_Connection):
+    """Two-port ``port_tx``: wait for a reply, send it, close."""
+
+    def __init__(self, server: TwoPortServer, conn: socket.socket, client: str) -> None:
+        super().__init__(server, conn, client)
+        self.two_port = server
+        self.reply: Future[list[float]] | None = None
+
+    def opened(self) -> None:
+        """Queue up for the next reply."""
+        self.two_port.waiting.append(self)
+        self.two_port.match()
+
+    def claim(self, reply: Future[list[float]]) -> None:
+        """This connection will carry ``reply`` once it is ready."""
+        self.reply = reply
+        reply.add_done_callback(self.ready)
+
+    def ready(self, reply: Future[list[float]]) -> None:
+        """The reply exists (loop thread): send it and close."""
+        if reply is not self.reply or self.closed:
+            return
+        if reply.exception() is not None:
+            self.close()
+            return
+        self.close_when_sent = True
+        self.send(pack_replies(reply.result(), self.two_port.width))
+
+    def received(self, chunk: bytes) -> None:
+        """Stray bytes are ignored; end of stream means the client left."""
+        if not chunk:
+            self.close()
+
+    def close(self) -> None:
+        """Close; an unsent reply goes back to the front of the queue for the next reader."""
+        if self.closed:
+            return
+        reply, self.reply = self.reply, None
+        unsent = reply is not None and not (self.close_when_sent and not self.outbox)
+        super().close()
+        if self in self.two_port.waiting:
+            self.two_port.waiting.remove(self)
+        if unsent and reply is not None and not self.server.bus.closed:
+            log.info("%s left before its reply was sent; kept for the next one", self.client)
+            self.two_port.unclaimed.appendleft(reply)
+            self.two_port.match()
+
+
+class StreamServer(_Server):
+    """The persistent protocol: many ``\\n``-terminated messages on one connection, each
+    answered in order with a frame (width byte, uint16 count, packed values)."""
+
+    kind = "stream"
+
+    def __init__(
+        self,
+        bus: CommandBus,
+        host: str = "127.0.0.1",
+        port: int = STREAM_PORT,
+        *,
+        width: int = 4,
+        encoding: str = "utf-8",
+    ) -> None:
+        super().__init__(bus, host, [port])
+        self.port = self.ports[0]
+        self.width = width
+        self.encoding = encoding
+
+    def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
+        """A persistent connection, listed among the bus's clients while open."""
+        stream = _StreamConnection(self, conn, f"stream {peer}")
+        self.bus.connect(stream.client, self.kind)
+        return stream
+
+    def forget(self, connection: _Connection) -> None:
+        """A connection has closed: no longer a client."""
+        super().forget(connection)
+        self.bus.disconnect(connection.client)
+
+
+class _StreamConnection(_Connection):
+    """One persistent-protocol connection: lines in, frames out, in order."""
+
+    def __init__(self, server: StreamServer, conn: socket.socket, client: str) -> None:
+        super().__init__(server, conn, client)
+        self.stream = server
+        self.inbox = bytearray()
+        self.searched = 0
+        self.ended = False  # an overlong line: no more input; close after its reply
+        self.last: Future[list[float]] | None = None
+
+    def received(self, chunk: bytes) -> None:
+        """Submit every complete line; an overlong line gets a NaN and ends the connection."""
+        if not chunk:
+            self.close()
+            return
+        if self.ended:
+            return
+        inbox = self.inbox
+        inbox += chunk
+        while (end := inbox.find(b"\n", self.searched)) >= 0:
+            self.submit(decode_message(bytes(inbox[:end]), self.stream.encoding))
+            del inbox[: end + 1]
+            self.searched = 0
+        self.searched = len(inbox)
+        if len(inbox) > MAX_MESSAGE_BYTES:
+            reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
+            self.ended = True
+            self.last = self.submit(Decoded(None, 1, reason))
+            inbox.clear()
+
+    def submit(self, decoded: Decoded) -> Future[list[float]]:
+        """Queue one message; its frame is sent as soon as the loop has answered it."""
+        future = self.server.bus.submit(decoded, self.client)
+        future.add_done_callback(self.reply)
+        return future
+
+    def reply(self, future: Future[list[float]]) -> None:
+        """Loop thread (or a closing bus): send the reply frame; futures complete in order."""
+        if self.closed:
+            return
+        if future.exception() is not None:
+            self.close()
+            return
+        self.close_when_sent = future is self.last
+        self.send(frame_replies(future.result(), self.stream.width))
