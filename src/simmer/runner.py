@@ -2,9 +2,9 @@
 
 It steps the simulation at ``speed`` times real time (``None``: as fast as it can), answers
 every message on its :class:`~simmer.transport.CommandBus` as soon as it arrives (it waits on
-the bus, not on a sleep, until the next step is due: a read is an instant snapshot, a drive
-starts at the next step), and calls ``on_frame`` at most ~60 times per wall-clock second so a
-window can draw and read the keyboard in the same thread.
+the bus, and on the TCP sockets the bus watches, not on a sleep, until the next step is due: a
+read is an instant snapshot, a drive starts at the next step), and calls ``on_frame`` at most
+~60 times per wall-clock second so a window can draw and read the keyboard in the same thread.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """How control programs reach the simulation: SimMeR's two-port scheme, the persistent
-stream protocol and a virtual serial port. Transport threads only read, decode and queue on the
-:class:`CommandBus`; the loop (:mod:`simmer.runner`) owns the simulation and also serves the
-persistent protocol's sockets directly. :class:`Link` starts the transports a run asks for."""
+stream protocol and a virtual serial port. Everything goes through the :class:`CommandBus`; the
+loop (:mod:`simmer.runner`) owns the simulation and also drives the TCP sockets (non-blocking,
+watched through the bus), while the serial port has a thread that only reads, decodes and
+queues. :class:`Link` starts the transports a run asks for."""
 
 from simmer.transport.bus import BusClosed, CommandBus, Request
 from simmer.transport.link import Link, is_loopback
