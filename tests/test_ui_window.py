@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import threading
 from collections.abc import Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -13,7 +14,9 @@ import pygame
 import pytest
 
 from simmer import Simulation
+from simmer.client import connect
 from simmer.runner import Runner
+from simmer.transport import Link
 from simmer.ui import Window, run_window
 from simmer.ui.hud import Stopwatch
 from simmer.ui.window import LocalControls, faster, slower
@@ -252,3 +255,37 @@ def test_run_window_quits_on_escape() -> None:
     key(pygame.K_ESCAPE)
     run_window(Runner(sim, speed=None))
     assert not sim.observers  # the window let go of the simulation
+
+
+def test_window_and_control_programs_share_one_loop() -> None:
+    sim = Simulation.from_config()
+    runner = Runner(sim, speed=1.0)
+    window = Window(sim)
+    stop, answered, seen = threading.Event(), threading.Event(), threading.Event()
+    replies: list[list[float]] = []
+    clients_seen: list[str] = []
+
+    def program(port: int) -> None:
+        with connect(port=port) as client:
+            replies.append(client.send("u0,u1"))
+            answered.set()
+            seen.wait(10)
+        stop.set()
+
+    def on_frame(loop: Runner) -> bool:
+        if answered.is_set() and loop.clients and not seen.is_set():
+            clients_seen.extend(loop.clients)
+            seen.set()
+        return window.frame(loop)
+
+    link = Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
+    with link:
+        thread = threading.Thread(target=program, args=(link.stream.port,))
+        thread.start()
+        runner.run(on_frame=on_frame, stop_event=stop, until=60.0)
+        thread.join()
+    runner.bus.close()
+    window.close()
+    assert replies == [[pytest.approx(39.5), pytest.approx(3.5)]]
+    assert window.commands.entries[-1].message == "u0,u1"
+    assert clients_seen

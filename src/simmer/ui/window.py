@@ -307,8 +307,9 @@ def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surf
     return surface
 
 
-def run_window(runner: Runner) -> None:
-    """Open a window on the runner's simulation and run until the user quits.
+def run_window(runner: Runner, until: float | None = None) -> None:
+    """Open a window on the runner's simulation; run until the user quits (or simulated
+    ``until`` seconds).
 
     Raises :class:`~simmer.errors.SimmerError` if no window can be opened (no display).
     """
@@ -317,7 +318,7 @@ def run_window(runner: Runner) -> None:
     except pygame.error as exc:
         raise SimmerError(f"cannot open a window ({exc}); use --headless") from None
     try:
-        runner.run(on_frame=window.frame)
+        runner.run(on_frame=window.frame, until=until)
     except KeyboardInterrupt:  # Ctrl-C in the terminal: close quietly, like Esc
         pass
     finally:
