@@ -13,7 +13,14 @@ import pytest
 
 from simmer import Simulation
 from simmer.devices.base import Segment
-from simmer.ui import PygameRenderer, RecordingRenderer, ScenePainter, View, Window
+from simmer.ui import (
+    PygameRenderer,
+    RecordingRenderer,
+    ScenePainter,
+    View,
+    Window,
+    render_scene,
+)
 from simmer.ui.render import merge_rects
 from simmer.ui.scene import BLACK_TILE, PANEL_HEIGHT, WHITE_TILE, default_window_size
 
@@ -190,3 +197,27 @@ def test_pygame_renderer_tracks_what_it_drew() -> None:
     r.draw_text("hi", (50, 50), (255, 255, 255), 18)
     assert r.dirty[0] == pygame.Rect(10, 10, 5, 5)
     assert r.dirty[1].topleft == (50, 50)
+
+
+def test_render_scene_saves_an_image(tmp_path: Path) -> None:
+    sim = Simulation.from_config()
+    sim.step()
+    path = tmp_path / "scene.png"
+    surface = render_scene(sim, path)
+    assert surface.get_size() == default_window_size(sim)
+    assert pygame.image.load(str(path)).get_size() == surface.get_size()
+    assert not sim.observers
+
+
+def test_exposed_window_is_redrawn_whole() -> None:
+    sim = Simulation.from_config()
+    pygame.display.init()
+    window = Window(sim, surface=pygame.Surface(default_window_size(sim)))
+    window.draw()
+    assert window._updated is None
+    window.draw()
+    assert window._updated is not None  # only what changed
+    window.handle(pygame.event.Event(pygame.WINDOWEXPOSED), window.local)
+    window.draw()
+    assert window._updated is None
+    window.close()

@@ -202,6 +202,8 @@ class Window:
         elif kind == pygame.WINDOWFOCUSLOST and self.held:
             self.held.clear()
             self.sim.set_manual_keys(self.held)
+        elif kind == pygame.WINDOWEXPOSED:
+            self._drawn = [self.static.get_rect()]  # redraw and show the whole window
         elif kind == pygame.VIDEORESIZE and self._own_display:
             self.screen = pygame.display.get_surface() or self.screen
             self.renderer.surface = self.screen
