@@ -167,6 +167,8 @@ def paint_hud_static(r: Renderer, sim: Simulation, width: int) -> None:
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
     x = width - LEGEND_WIDTH
+    if x < CLIENTS_X + 220:  # no room beside the clients column: leave it out
+        return
     for i, (color, label) in enumerate(legend(sim)):
         y = 12 + 22 * i
         r.draw_rect((x, y + 2, 14, 14), color)
