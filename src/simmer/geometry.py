@@ -125,6 +125,19 @@ def ray_segments(ox: float, oy: float, dx: float, dy: float, segments: FloatArra
 
 
 @_jit
+def _grid_axis(
+    origin: float, direction: float, index: int, cell: float
+) -> tuple[int, float, float]:
+    """For one axis of a grid walk: the step (-1, 0, 1), the ray distance to the first grid line
+    crossed, and the distance between successive lines."""
+    if direction > _EPS:
+        return 1, ((index + 1) * cell - origin) / direction, cell / direction
+    if direction < -_EPS:
+        return -1, (index * cell - origin) / direction, -cell / direction
+    return 0, math.inf, math.inf
+
+
+@_jit
 def ray_grid(
     hwall: BoolArray,
     vwall: BoolArray,
@@ -147,30 +160,8 @@ def ray_grid(
     cy = int(math.floor(oy / cell))
     if cx < 0 or cy < 0 or cx >= cols or cy >= rows:
         return -1.0
-    if dx > _EPS:
-        step_x = 1
-        t_max_x = ((cx + 1) * cell - ox) / dx
-        t_delta_x = cell / dx
-    elif dx < -_EPS:
-        step_x = -1
-        t_max_x = (cx * cell - ox) / dx
-        t_delta_x = -cell / dx
-    else:
-        step_x = 0
-        t_max_x = math.inf
-        t_delta_x = math.inf
-    if dy > _EPS:
-        step_y = 1
-        t_max_y = ((cy + 1) * cell - oy) / dy
-        t_delta_y = cell / dy
-    elif dy < -_EPS:
-        step_y = -1
-        t_max_y = (cy * cell - oy) / dy
-        t_delta_y = -cell / dy
-    else:
-        step_y = 0
-        t_max_y = math.inf
-        t_delta_y = math.inf
+    step_x, t_max_x, t_delta_x = _grid_axis(ox, dx, cx, cell)
+    step_y, t_max_y, t_delta_y = _grid_axis(oy, dy, cy, cell)
     while True:
         if t_max_x <= t_max_y:
             if t_max_x > limit:

@@ -23,7 +23,14 @@ from simmer.geometry import (
 # ----------------------------------------------------------------------------- ultrasonic
 
 
-class UltrasonicParams(DeviceParams):
+class MeasuredParams(DeviceParams):
+    """Settings of a sensor whose latest measurement the window can draw."""
+
+    visible_measurement: bool = Field(True, description="Draw the measurement after a read.")
+    visible_measurement_time: float = Field(0.5, ge=0, description="How long, in seconds.")
+
+
+class UltrasonicParams(MeasuredParams):
     """Ultrasonic range finder settings (defaults as SimMeR's)."""
 
     type: str = "ultrasonic"
@@ -35,8 +42,6 @@ class UltrasonicParams(DeviceParams):
     min_range: float = Field(0.0, ge=0, description="Shortest reading, inches.")
     max_range: float = Field(433.0, gt=0, description="Longest reading, inches.")
     error: float = Field(0.02, ge=0, description="Percent error (SimMeR's, sd 2·error).")
-    visible_measurement: bool = Field(True, description="Draw the rays after a read.")
-    visible_measurement_time: float = Field(0.5, ge=0, description="How long, in seconds.")
     ray_color: Color = Field((0, 255, 0), description="RGB colour of the drawn rays.")
 
     def problems(self) -> list[tuple[str, str]]:
@@ -196,7 +201,7 @@ class Compass(Device):
 _DISK = disk_samples(256)
 
 
-class InfraredParams(DeviceParams):
+class InfraredParams(MeasuredParams):
     """Downward infrared floor sensor settings."""
 
     type: str = "infrared"
@@ -209,9 +214,7 @@ class InfraredParams(DeviceParams):
         description="'geometric': radius height·tan(fov/2); 'simmer': the original's "
         "height·cos(fov/2).",
     )
-    visible_measurement: bool = True
-    visible_measurement_time: float = Field(0.5, ge=0)
-    color: Color = (255, 128, 0)
+    color: Color = Field((255, 128, 0), description="RGB colour of the outline and black reads.")
 
 
 class Infrared(Device):
