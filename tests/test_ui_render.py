@@ -14,13 +14,17 @@ import pytest
 from simmer import Simulation
 from simmer.devices.base import Segment
 from simmer.ui import (
+    Bridge,
     PygameRenderer,
     RecordingRenderer,
     ScenePainter,
+    Snapshot,
+    StaticScene,
     View,
     Window,
     render_scene,
 )
+from simmer.ui.hud import LIT, paint_hud
 from simmer.ui.render import merge_rects
 from simmer.ui.scene import BLACK_TILE, PANEL_HEIGHT, WHITE_TILE, default_window_size
 
@@ -50,7 +54,7 @@ def small(tmp_path: Path) -> Simulation:
 def test_static_layer_draw_calls(small: Simulation) -> None:
     view = View(10.0, 20.0, 30.0)
     rec = RecordingRenderer()
-    ScenePainter(small).paint_static(rec, view, (280, 170))
+    ScenePainter(StaticScene.of(small)).paint_static(rec, view, (280, 170))
     settings = small.config.settings
     assert rec.calls[0].op == "fill"
     assert rec.calls[0].args == (settings.background_color,)
@@ -78,8 +82,8 @@ def test_static_layer_draw_calls(small: Simulation) -> None:
 def test_dynamic_layer_draw_calls(small: Simulation) -> None:
     view = View(10.0, 20.0, 30.0)
     rec = RecordingRenderer()
-    painter = ScenePainter(small)
-    painter.paint_dynamic(rec, view)
+    painter = ScenePainter(StaticScene.of(small))
+    painter.paint_dynamic(rec, view, Snapshot.of(small))
     settings = small.config.settings
     ops = [call.op for call in rec.calls]
     # block fill + outline, robot fill + outline, heading mark; no floor or walls
@@ -104,9 +108,9 @@ def test_measurements_and_devices_are_drawn() -> None:
     sim = Simulation.from_config()  # the lab rover, all four ultrasonic sensors simulated
     sim.step()
     rec = RecordingRenderer()
-    painter = ScenePainter(sim)
+    painter = ScenePainter(StaticScene.of(sim))
     view = View.fit(sim, default_window_size(sim))
-    painter.paint_dynamic(rec, view)
+    painter.paint_dynamic(rec, view, Snapshot.of(sim))
     rays = rec.of("segment")[1:]  # after the heading mark
     assert len(rays) == 4 * 7
     u0 = sim.robot.sensors["u0"]
@@ -127,7 +131,8 @@ def test_pixels_on_a_real_surface() -> None:
     assert size == (1576, 920)  # fits a 1080p screen at the default ppi
     pygame.display.init()
     surface = pygame.Surface(size)
-    window = Window(sim, surface=surface)
+    bridge = Bridge(sim)
+    window = Window(bridge, surface=surface)
     window.draw()
     view = window.view
     settings = sim.config.settings
@@ -159,21 +164,25 @@ def test_pixels_on_a_real_surface() -> None:
     assert pixel(pose.x - 1.5, pose.y + 1.5) == window.painter.robot_fill
     assert pixel(pose.x + 2.875, pose.y + 3) == settings.robot_color  # robot frame (-2.875, -3)
     window.close()
+    bridge.close()
 
 
 def test_partial_redraw_matches_a_full_redraw() -> None:
     sim = Simulation.from_config()
     pygame.display.init()
     size = default_window_size(sim)
-    window = Window(sim, surface=pygame.Surface(size))
+    bridge = Bridge(sim)
+    window = Window(bridge, surface=pygame.Surface(size))
     window.draw()
     sim.command("w0-12")
     for _ in range(40):
         sim.step()
+        bridge.sync()
         window.draw()
-    fresh = Window(Simulation.from_config(), surface=pygame.Surface(size))
-    fresh.sim.command("w0-12")
-    fresh.sim.step(40)
+    other = Simulation.from_config()
+    other.command("w0-12")
+    other.step(40)
+    fresh = Window(Bridge(other), surface=pygame.Surface(size))
     fresh.draw()
     maze_top = PANEL_HEIGHT + 1
     area = pygame.Rect(0, maze_top, size[0], size[1] - maze_top)
@@ -212,12 +221,37 @@ def test_render_scene_saves_an_image(tmp_path: Path) -> None:
 def test_exposed_window_is_redrawn_whole() -> None:
     sim = Simulation.from_config()
     pygame.display.init()
-    window = Window(sim, surface=pygame.Surface(default_window_size(sim)))
+    bridge = Bridge(sim)
+    window = Window(bridge, surface=pygame.Surface(default_window_size(sim)))
     window.draw()
     assert window._updated is None
     window.draw()
     assert window._updated is not None  # only what changed
-    window.handle(pygame.event.Event(pygame.WINDOWEXPOSED), window.local)
+    window.handle(pygame.event.Event(pygame.WINDOWEXPOSED))
     window.draw()
     assert window._updated is None
     window.close()
+    bridge.close()
+
+
+def test_hud_is_painted_from_the_snapshot_alone() -> None:
+    sim = Simulation.from_config()
+    bridge = Bridge(sim)
+    sim.command("u0")
+    sim.set_manual_keys({"w"})
+    bridge.local.paused = True
+    bridge.local.clients = ["127.0.0.1:50000"]
+    bridge.sync()
+    snap = bridge.latest
+    first = RecordingRenderer()
+    paint_hud(first, snap)
+    texts = [args[0] for args in first.of("text")]
+    assert any("PAUSED" in str(text) for text in texts)
+    assert any(str(text).strip().startswith("0.00 s  u0 -> ") for text in texts)
+    assert "127.0.0.1:50000" in texts
+    assert ((52 + 30, 12, 26, 26), LIT, 0) in first.of("rect")  # the W key lit
+    sim.step(60)  # the simulation moves on; the snapshot does not
+    again = RecordingRenderer()
+    paint_hud(again, snap)
+    assert again.calls == first.calls
+    bridge.close()

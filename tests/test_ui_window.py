@@ -1,4 +1,9 @@
-"""The window driven by real pygame events (dummy video driver; no wall-clock timing)."""
+"""The window driven by real pygame events (dummy video driver; no wall-clock timing).
+
+Most tests run both sides in this thread for determinism: post events, ``tick`` (the window
+handles them and posts actions, the bridge applies them and publishes a snapshot, the window
+draws it), step the simulation. The last tests run the real two threads.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +11,7 @@ import logging
 import math
 import os
 import threading
+import time
 from collections.abc import Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -15,20 +21,35 @@ import pytest
 
 from simmer import Simulation
 from simmer.client import connect
+from simmer.geometry import Pose
 from simmer.runner import Runner
 from simmer.transport import Link
-from simmer.ui import Window, run_window
+from simmer.ui import Bridge, Window, run_window
+from simmer.ui.bridge import Controls
 from simmer.ui.hud import Stopwatch
 from simmer.ui.window import LocalControls, faster, slower
+
+TIMEOUT = 30.0
+"""Generous seconds for anything another thread must do (never a speed assertion)."""
 
 
 @pytest.fixture
 def window() -> Iterator[Window]:
     """A real (dummy-driver) window on the built-in default: lab rover at (6, 42), heading 180."""
-    win = Window(Simulation.from_config())
+    bridge = Bridge(Simulation.from_config())
+    win = Window(bridge)
     pygame.event.clear()
     yield win
     win.close()
+    bridge.close()
+
+
+def tick(win: Window, controls: Controls | None = None) -> bool:
+    """One frame, both sides in this thread: events -> actions -> applied -> snapshot -> drawn."""
+    keep = win.frame()
+    keep = win.bridge.sync(controls) and keep
+    win.draw()
+    return keep
 
 
 def key(code: int, down: bool = True, unicode: str = "") -> None:
@@ -50,112 +71,138 @@ def mouse(kind: int, win: Window, x: float, y: float, button: int = 1) -> None:
 
 
 def test_holding_w_for_one_second_drives_six_inches(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     start = sim.robot.pose
     key(pygame.K_w)
-    assert window.frame()
+    assert tick(window)
     assert window.held == {"w"}
     sim.step(round(1.0 / sim.dt))
     pose = sim.robot.pose
     assert math.hypot(pose.x - start.x, pose.y - start.y) == pytest.approx(6.0)
     assert pose.y == pytest.approx(start.y - 6.0)  # heading 180: forward is up the screen
     key(pygame.K_w, down=False)
-    window.frame()
+    tick(window)
     sim.step(10)
     assert sim.robot.pose == pose  # released: no more motion
 
 
 def test_turn_keys(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     key(pygame.K_d)
-    window.frame()
+    tick(window)
     sim.step(round(0.5 / sim.dt))
     assert sim.robot.pose.heading == pytest.approx(240.0)  # 120 deg/s clockwise
 
 
 def test_r_mid_drive_restores_the_start_and_clears_the_drive(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     start = sim.robot.pose
     sim.command("w0-24")
     sim.step(30)
     key(pygame.K_q)
-    window.frame()
+    tick(window)
     sim.step(5)
     assert sim.robot.pose != start
-    assert window.stopwatch.start is not None
+    assert window.bridge.stopwatch.start is not None
     key(pygame.K_r, unicode="r")
-    window.frame()
+    tick(window)
     assert sim.robot.pose == start
     assert sim.time == 0.0
     assert not sim.robot.any_drive_moving
     assert not sim.manual_keys
     assert not window.held
-    assert window.stopwatch.elapsed() is None
+    assert window.bridge.stopwatch.elapsed() is None
     sim.step(30)
     assert sim.robot.pose == start
 
 
 def test_space_pauses_and_period_steps(window: Window) -> None:
     key(pygame.K_SPACE, unicode=" ")
-    window.frame()
-    assert window.local.paused
+    tick(window)
+    assert window.bridge.local.paused
     key(pygame.K_PERIOD, unicode=".")
-    window.frame()
-    assert window.sim.frame == 1
+    tick(window)
+    assert window.bridge.sim.frame == 1
     key(pygame.K_SPACE, unicode=" ")
-    window.frame()
-    assert not window.local.paused
+    tick(window)
+    assert not window.bridge.local.paused
     key(pygame.K_PERIOD, unicode=".")
-    window.frame()
-    assert window.sim.frame == 1  # '.' only steps while paused
+    tick(window)
+    assert window.bridge.sim.frame == 1  # '.' only steps while paused
 
 
 def test_keys_act_on_the_runner(window: Window) -> None:
-    runner = Runner(window.sim, speed=1.0)
+    runner = Runner(window.bridge.sim, speed=1.0)
     key(pygame.K_SPACE, unicode=" ")
     key(pygame.K_EQUALS, unicode="+")
-    assert window.frame(runner)
+    assert tick(window, runner)
     assert runner.paused
     assert runner.speed == 2.0
-    assert not window.local.paused
+    assert not window.bridge.local.paused
     key(pygame.K_MINUS, unicode="-")
     key(pygame.K_MINUS, unicode="-")
-    window.frame(runner)
+    tick(window, runner)
     assert runner.speed == 0.5
 
 
-def test_window_as_the_runner_frame_hook(window: Window) -> None:
-    sim = window.sim
+def test_the_window_only_posts_actions(window: Window) -> None:
+    sim = window.bridge.sim
+    key(pygame.K_w)
+    key(pygame.K_SPACE, unicode=" ")
+    assert window.frame()
+    assert not sim.manual_keys  # nothing reached the simulation yet: it is another thread's
+    assert not window.bridge.local.paused
+    assert not window.bridge.latest.held
+    assert window.bridge.sync()
+    assert sim.manual_keys == {"w"}
+    assert window.bridge.local.paused
+    snap = window.bridge.latest
+    assert snap.held == {"w"}
+    assert snap.paused
+    assert not snap.robot.flags.writeable  # snapshots are immutable
+    window.draw()
+    assert window.bridge.latest is snap
+
+
+def test_window_and_runner_in_two_threads(window: Window) -> None:
+    sim = window.bridge.sim
     start = sim.robot.pose
     key(pygame.K_w)
-    Runner(sim, speed=None).run(on_frame=window.frame, until=1.0)
+    assert window.frame()  # posted before the simulation thread starts: applied at its 1st sync
+    window.run(Runner(sim, speed=None), until=1.0)
     assert sim.time == pytest.approx(1.0)
     assert sim.robot.pose.y == pytest.approx(start.y - 6.0)
+    assert window.bridge.latest.time == pytest.approx(sim.time, abs=sim.dt)
+
+
+def test_window_rejects_another_simulation(window: Window) -> None:
+    with pytest.raises(ValueError, match="another simulation"):
+        window.run(Runner(Simulation.from_config()), until=0.1)
 
 
 def test_escape_and_close_quit(window: Window) -> None:
-    assert window.frame()
+    assert tick(window)
     key(pygame.K_ESCAPE)
-    assert not window.frame()
+    assert not tick(window)
     pygame.event.post(pygame.event.Event(pygame.QUIT))
-    assert not window.frame()
+    assert not tick(window)
 
 
 def test_h_toggles_help(window: Window) -> None:
     key(pygame.K_h, unicode="h")
-    window.frame()
+    tick(window)
     assert window.show_help
     key(pygame.K_h, unicode="h")
-    window.frame()
+    tick(window)
     assert not window.show_help
 
 
 def test_drag_moves_the_robot(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     mouse(pygame.MOUSEBUTTONDOWN, window, 6, 42)
     mouse(pygame.MOUSEMOTION, window, 18, 42)
     mouse(pygame.MOUSEBUTTONUP, window, 18, 42)
-    window.frame()
+    tick(window)
     pose = sim.robot.pose
     assert pose.x == pytest.approx(18, abs=0.1)
     assert pose.y == pytest.approx(42, abs=0.1)
@@ -164,48 +211,51 @@ def test_drag_moves_the_robot(window: Window) -> None:
 
 
 def test_dragging_onto_a_wall_is_refused(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     start = sim.robot.pose
     mouse(pygame.MOUSEBUTTONDOWN, window, 6, 42)
     mouse(pygame.MOUSEMOTION, window, 18, 30)  # the solid cell at row 2, column 1
-    window.frame()
+    tick(window)
     assert sim.robot.pose == start
-    assert window.ghost is not None  # the refused place is shown as a red outline
+    ghost = window.bridge.latest.ghost
+    assert ghost is not None  # the refused place is shown as a red outline
+    expected = sim.robot.polygon(Pose(18, 30, 180))  # the dragged-to place, to a pixel
+    assert ghost == pytest.approx(expected, abs=0.1)
     mouse(pygame.MOUSEBUTTONUP, window, 18, 30)
-    window.frame()
+    tick(window)
     assert sim.robot.pose == start
-    assert window.ghost is None
+    assert window.bridge.latest.ghost is None
 
 
 def test_right_drag_turns_the_robot(window: Window) -> None:
-    sim = window.sim
+    sim = window.bridge.sim
     mouse(pygame.MOUSEBUTTONDOWN, window, 6, 40, button=3)
     mouse(pygame.MOUSEMOTION, window, 8, 42, button=3)
     mouse(pygame.MOUSEBUTTONUP, window, 8, 42, button=3)
-    window.frame()
+    tick(window)
     pose = sim.robot.pose
     assert (pose.x, pose.y) == (6.0, 42.0)
     assert pose.heading == pytest.approx(270.0, abs=1.0)
 
 
 def test_click_off_the_robot_does_nothing(window: Window) -> None:
-    start = window.sim.robot.pose
+    start = window.bridge.sim.robot.pose
     mouse(pygame.MOUSEBUTTONDOWN, window, 30, 42)
     mouse(pygame.MOUSEMOTION, window, 40, 42)
-    window.frame()
+    tick(window)
     assert window.drag is None
-    assert window.sim.robot.pose == start
+    assert window.bridge.sim.robot.pose == start
 
 
 def test_resize_rescales_the_scene(window: Window) -> None:
     before = window.view.ppi
     pygame.display.set_mode((800, 500), pygame.RESIZABLE)
     pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=(800, 500), w=800, h=500))
-    window.frame()
+    tick(window)
     assert window.screen.get_size() == (800, 500)
     assert window.view.ppi < before
     left, _ = window.view.point(0, 0)
-    right, bottom = window.view.point(window.sim.maze.width, window.sim.maze.height)
+    right, bottom = window.view.point(window.bridge.sim.maze.width, window.bridge.sim.maze.height)
     assert 0 < left < right <= 800
     assert bottom <= 500
 
@@ -257,35 +307,91 @@ def test_run_window_quits_on_escape() -> None:
     assert not sim.observers  # the window let go of the simulation
 
 
-def test_window_and_control_programs_share_one_loop() -> None:
+def test_window_and_control_programs_share_one_simulation() -> None:
     sim = Simulation.from_config()
     runner = Runner(sim, speed=1.0)
-    window = Window(sim)
-    stop, answered, seen = threading.Event(), threading.Event(), threading.Event()
+    bridge = Bridge(sim)
+    window = Window(bridge)
+    stop = threading.Event()
     replies: list[list[float]] = []
     clients_seen: list[str] = []
+    errors: list[BaseException] = []
 
     def program(port: int) -> None:
-        with connect(port=port) as client:
-            replies.append(client.send("u0,u1"))
-            answered.set()
-            seen.wait(10)
-        stop.set()
-
-    def on_frame(loop: Runner) -> bool:
-        if answered.is_set() and loop.clients and not seen.is_set():
-            clients_seen.extend(loop.clients)
-            seen.set()
-        return window.frame(loop)
+        try:
+            with connect(port=port) as client:
+                replies.append(client.send("u0,u1"))
+                deadline = time.monotonic() + TIMEOUT
+                while not bridge.latest.clients and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                clients_seen.extend(bridge.latest.clients or ())
+        except BaseException as exc:
+            errors.append(exc)
+        finally:
+            stop.set()
 
     link = Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
     with link:
         thread = threading.Thread(target=program, args=(link.stream.port,))
         thread.start()
-        runner.run(on_frame=on_frame, stop_event=stop, until=60.0)
-        thread.join()
+        window.run(runner, stop=stop, until=120.0)
+        thread.join(TIMEOUT)
     runner.bus.close()
     window.close()
+    bridge.close()
+    assert not errors
     assert replies == [[pytest.approx(39.5), pytest.approx(3.5)]]
-    assert window.commands.entries[-1].message == "u0,u1"
+    assert bridge.latest.commands[-1].message == "u0,u1"
     assert clients_seen
+
+
+def test_drawing_never_starves_the_control_link(monkeypatch: pytest.MonkeyPatch) -> None:
+    """While the window thread is stuck in the flip, commands are still answered."""
+    sim = Simulation.from_config()
+    runner = Runner(sim, speed=1.0)
+    bridge = Bridge(sim)
+    window = Window(bridge)
+    in_flip, release, stop = threading.Event(), threading.Event(), threading.Event()
+    flips = {"entered": 0, "returned": 0}
+    answered: list[tuple[list[float], int]] = []
+    errors: list[BaseException] = []
+
+    def blocking_flip(*args: object) -> None:
+        flips["entered"] += 1
+        in_flip.set()
+        assert release.wait(TIMEOUT)
+        flips["returned"] += 1
+
+    monkeypatch.setattr(pygame.display, "update", blocking_flip)
+    monkeypatch.setattr(pygame.display, "flip", blocking_flip)
+
+    def program(port: int) -> None:
+        try:
+            assert in_flip.wait(TIMEOUT)
+            with connect(port=port) as client:
+                for message in ("u0,u1", "w0-3", "u0", "r0-90", "xx", "u1"):
+                    answered.append((client.send(message), flips["returned"]))
+        except BaseException as exc:
+            errors.append(exc)
+        finally:
+            release.set()
+            stop.set()
+
+    link = Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
+    with link:
+        thread = threading.Thread(target=program, args=(link.stream.port,))
+        thread.start()
+        window.run(runner, stop=stop, until=600.0)
+        thread.join(TIMEOUT)
+    runner.bus.close()
+    window.close()
+    bridge.close()
+    assert not errors
+    assert flips["entered"] == 1  # the window thread never got past its first flip ...
+    assert [returned for _, returned in answered] == [0] * 6  # ... while all six were answered
+    replies = [reply for reply, _ in answered]
+    assert replies[0] == [pytest.approx(39.5), pytest.approx(3.5)]
+    assert replies[1] == [math.inf]
+    assert len(replies) == 6
+    assert all(len(reply) == 1 for reply in replies[1:])
+    assert not thread.is_alive()

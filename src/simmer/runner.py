@@ -4,7 +4,9 @@ It steps the simulation at ``speed`` times real time (``None``: as fast as it ca
 every message on its :class:`~simmer.transport.CommandBus` as soon as it arrives (it waits on
 the bus, and on the TCP sockets the bus watches, not on a sleep, until the next step is due: a
 read is an instant snapshot, a drive starts at the next step), and calls ``on_frame`` at most
-~60 times per wall-clock second so a window can draw and read the keyboard in the same thread.
+~60 times per wall-clock second. The window's hook (:meth:`simmer.ui.bridge.Bridge.sync`) only
+applies queued key and mouse actions and publishes an immutable snapshot; the window draws it in
+another thread, so drawing never delays a reply.
 """
 
 from __future__ import annotations

@@ -1,9 +1,11 @@
 """The simulator window: the only package that imports pygame (DESIGN §1).
 
-:class:`~simmer.ui.window.Window` draws a :class:`~simmer.world.Simulation` and turns keys and
-mouse into manual driving, pausing, resetting and dragging; its :meth:`Window.frame` is the
-per-frame hook a runner calls. Drawing goes through the small :class:`~simmer.ui.render.Renderer`
-interface, so tests can record the draw calls without a window.
+:class:`~simmer.ui.window.Window` runs pygame in the main thread and the simulation in its own
+thread: it draws immutable :class:`~simmer.ui.snapshot.Snapshot` values and turns keys and mouse
+into actions (manual driving, pausing, resetting, dragging) that a
+:class:`~simmer.ui.bridge.Bridge` applies in the simulation thread, so drawing never delays a
+command's reply. Drawing goes through the small :class:`~simmer.ui.render.Renderer` interface, so
+tests can record the draw calls without a window.
 """
 
 from __future__ import annotations
@@ -12,16 +14,21 @@ import os
 
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
+from simmer.ui.bridge import Bridge
 from simmer.ui.hud import Stopwatch
 from simmer.ui.render import PygameRenderer, RecordingRenderer, Renderer
 from simmer.ui.scene import ScenePainter, View
+from simmer.ui.snapshot import Snapshot, StaticScene
 from simmer.ui.window import Window, render_scene, run_window
 
 __all__ = [
+    "Bridge",
     "PygameRenderer",
     "RecordingRenderer",
     "Renderer",
     "ScenePainter",
+    "Snapshot",
+    "StaticScene",
     "Stopwatch",
     "View",
     "Window",

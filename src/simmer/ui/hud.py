@@ -1,17 +1,21 @@
-"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help."""
+"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help.
+
+:class:`Stopwatch` and :class:`CommandLog` observe the simulation in its own thread; the painters
+read only a :class:`~simmer.ui.snapshot.Snapshot` (and the static configuration).
+"""
 
 from __future__ import annotations
 
 import logging
 import math
 from collections import deque
-from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from simmer.geometry import FloatArray, Pose
 from simmer.ui.render import Color, Renderer
 from simmer.ui.scene import PANEL_HEIGHT, tint
+from simmer.ui.snapshot import HasScene, Snapshot
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event, ResetEvent, StepEvent
 from simmer.world.simulation import MANUAL_KEYS
@@ -146,30 +150,31 @@ def _key_cap(r: Renderer, key: str, lit: bool) -> None:
     r.draw_text(key.upper(), (x + 8, y + 6), (0, 0, 0) if lit else TEXT, 20)
 
 
-def legend(sim: Simulation) -> list[tuple[Color, str]]:
+def legend(scene: HasScene) -> list[tuple[Color, str]]:
     """What the scene's colours mean."""
-    settings = sim.config.settings
+    config = scene.config
+    settings = config.settings
     items = [
         (settings.wall_color, "wall"),
         (settings.block_color, "block (the target)"),
         (settings.robot_color, "robot, devices"),
     ]
-    for device in sim.robot.devices.values():
-        color = getattr(device.params, "ray_color", None)
+    for spec in config.devices:
+        color = getattr(spec.params, "ray_color", None)
         if color is not None:
             items.append((color, "ultrasonic rays"))
             break
     return items
 
 
-def paint_hud_static(r: Renderer, sim: Simulation, width: int) -> None:
+def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
     """The HUD's fixed parts: unlit key caps, labels, colour legend (painted once)."""
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
     x = width - LEGEND_WIDTH
     if x < CLIENTS_X + 220:  # no room beside the clients column: leave it out
         return
-    for i, (color, label) in enumerate(legend(sim)):
+    for i, (color, label) in enumerate(legend(scene)):
         y = 12 + 22 * i
         r.draw_rect((x, y + 2, 14, 14), color)
         r.draw_text(label, (x + 22, y), TEXT, 20)
@@ -179,47 +184,39 @@ def paint_hud_static(r: Renderer, sim: Simulation, width: int) -> None:
     r.draw_text("last commands -> replies", (COMMANDS_X, ROWS[0]), DIM, 20)
 
 
-def paint_hud(
-    r: Renderer,
-    sim: Simulation,
-    *,
-    held: Iterable[str],
-    paused: bool,
-    speed: float | None,
-    stopwatch: Stopwatch,
-    commands: Sequence[CommandEvent],
-    clients: Sequence[str] | None,
-) -> None:
+def paint_hud(r: Renderer, snap: Snapshot) -> None:
     """The HUD's changing values; everything in simulated time."""
     # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
-    r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), sim.time % 1.0, UNLIT))
-    for key in held:
+    r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), snap.time % 1.0, UNLIT))
+    for key in sorted(snap.held):
         _key_cap(r, key, lit=True)
 
+    paused = snap.paused
     state = "PAUSED (Space resumes, . steps)" if paused else "running"
     r.draw_text(
-        f"{sim.time:.2f} s   speed {speed_text(speed)}   {state}",
+        f"{snap.time:.2f} s   speed {speed_text(snap.speed)}   {state}",
         (VALUE_X, ROWS[0]),
         LIT if paused else TEXT,
         22,
     )
-    elapsed = stopwatch.elapsed()
+    elapsed = snap.watch_elapsed
     if elapsed is None:
         watch, color = "starts when the robot first moves", DIM
-    elif stopwatch.stop is None:
+    elif not snap.watch_stopped:
         watch, color = f"{elapsed:.2f} s", TEXT
     else:
         watch, color = f"reached the block in {elapsed:.2f} s", LIT
     r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
-    pose = sim.robot.pose
+    pose = snap.pose
     r.draw_text(
         f"x {pose.x:.2f} in   y {pose.y:.2f} in   heading {pose.heading:.1f} deg",
         (VALUE_X, ROWS[2]),
         TEXT,
         22,
     )
-    r.draw_text(str(sim.collisions), (VALUE_X, ROWS[3]), TEXT, 22)
+    r.draw_text(str(snap.collisions), (VALUE_X, ROWS[3]), TEXT, 22)
 
+    commands = snap.commands
     if not commands:
         r.draw_text("none yet", (COMMANDS_X, 32), DIM, 18)
     for i, event in enumerate(reversed(commands)):
@@ -227,6 +224,7 @@ def paint_hud(
         line = f"{event.time:7.2f} s  {event.message[:28]} -> {replies[:40]}"
         r.draw_text(line, (COMMANDS_X, 32 + 16 * i), TEXT, 18)
 
+    clients = snap.clients
     if clients is not None:
         r.draw_text("connected clients", (CLIENTS_X, ROWS[0]), DIM, 20)
         for i, client in enumerate(clients[:5]):

@@ -1,7 +1,9 @@
 """Painting the world: inches become pixels here, never in the model (DESIGN §1).
 
-The static layer (background, floor tiles, walls, inch rulers) is painted once per window size;
-the dynamic layer (block, robot, device outlines, sensor measurements) every frame.
+The static layer (background, floor tiles, walls, inch rulers) is painted once per window size
+from the configuration and maze; the dynamic layer (block, robot, device outlines, sensor
+measurements) every frame from a :class:`~simmer.ui.snapshot.Snapshot`, never from the live
+simulation, so painting can run in another thread than the one stepping it.
 """
 
 from __future__ import annotations
@@ -12,10 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from simmer.devices.base import Circle, Segment
-from simmer.geometry import FloatArray, place_polygon
+from simmer.geometry import FloatArray
 from simmer.ui.render import Color, Point, Renderer
-from simmer.world import Simulation
-from simmer.world.robot import Robot
+from simmer.ui.snapshot import HasScene, Snapshot
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""
@@ -34,10 +35,10 @@ class View:
     oy: float
 
     @classmethod
-    def fit(cls, sim: Simulation, size: tuple[int, int]) -> View:
+    def fit(cls, scene: HasScene, size: tuple[int, int]) -> View:
         """The largest view of the maze (plus border) that fits under the HUD panel."""
-        settings = sim.config.settings
-        base_w, base_h = base_scene_size(sim)
+        settings = scene.config.settings
+        base_w, base_h = base_scene_size(scene)
         avail_h = max(1, size[1] - PANEL_HEIGHT)
         scale = min(size[0] / base_w, avail_h / base_h)
         border = settings.border_pixels * scale
@@ -63,16 +64,16 @@ class View:
         return max(1, round(inches * self.ppi))
 
 
-def base_scene_size(sim: Simulation) -> tuple[float, float]:
+def base_scene_size(scene: HasScene) -> tuple[float, float]:
     """Maze plus border at the configured ``ppi``, in pixels (without the HUD panel)."""
-    settings = sim.config.settings
+    settings = scene.config.settings
     border = 2 * settings.border_pixels
-    return (sim.maze.width * settings.ppi + border, sim.maze.height * settings.ppi + border)
+    return (scene.maze.width * settings.ppi + border, scene.maze.height * settings.ppi + border)
 
 
-def default_window_size(sim: Simulation) -> tuple[int, int]:
+def default_window_size(scene: HasScene) -> tuple[int, int]:
     """The window size at the configured ``ppi`` (1576 × 920 for the default maze)."""
-    width, height = base_scene_size(sim)
+    width, height = base_scene_size(scene)
     return (math.ceil(width), math.ceil(height) + PANEL_HEIGHT)
 
 
@@ -82,64 +83,26 @@ def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
     return (r, g, b)
 
 
-@dataclass
-class RobotShape:
-    """Robot outline, heading mark, visible device outlines and sensor-id anchors stacked in one
-    robot-frame array, so a frame places them all with one call."""
-
-    robot: Robot
-    local: FloatArray
-    world: FloatArray
-    body: int
-    """Points ``[0, body)`` are the outline; the next two are the heading mark."""
-    devices: list[tuple[int, int, Color]]
-    """(start, stop, colour) of each visible device's outline."""
-    labels: list[tuple[int, str, Color]]
-    """(point, id, colour): where to write each off-centre visible sensor's id."""
-
-    @classmethod
-    def of(cls, robot: Robot) -> RobotShape:
-        """Stack a robot's shapes."""
-        reach = 0.3 * float(np.min(np.abs(robot.outline).max(axis=0)))
-        pieces = [robot.outline, np.array([[0.0, 0.0], [0.0, reach]])]
-        devices = []
-        start = len(robot.outline) + 2
-        for device in robot.devices.values():
-            if device.visible:
-                placed = np.empty_like(device.outline)
-                x, y = device.position
-                place_polygon(device.outline, x, y, device.rotation, placed)
-                pieces.append(placed)
-                devices.append((start, start + len(placed), device.params.color))
-                start += len(placed)
-        labels = []
-        for device in robot.sensors.values():
-            x, y = device.position
-            if device.visible and math.hypot(x, y) > 0.5:
-                pieces.append(np.array([[0.55 * x, 0.55 * y]]))  # inside the body, toward it
-                labels.append((start, device.id, device.params.color))
-                start += 1
-        local = np.concatenate(pieces)
-        return cls(robot, local, np.empty_like(local), len(robot.outline), devices, labels)
-
-
 class ScenePainter:
-    """Draws one simulation's maze, block, robot and sensors with any :class:`Renderer`."""
+    """Draws one simulation's maze, block, robot and sensors with any :class:`Renderer`.
 
-    def __init__(self, sim: Simulation) -> None:
-        self.sim = sim
-        settings = sim.config.settings
+    ``scene``: a :class:`~simmer.ui.snapshot.StaticScene` (or the simulation itself, read
+    only here, for its configuration and maze).
+    """
+
+    def __init__(self, scene: HasScene) -> None:
+        settings = scene.config.settings
         self.settings = settings
+        self.maze = scene.maze
         self.robot_fill = tint(settings.robot_color, 0.75)
         self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
-        self._robot_shape: RobotShape | None = None
 
     # ----------------------------------------------------------------- static layer
 
     def paint_static(self, r: Renderer, view: View, size: tuple[int, int]) -> None:
         """Background, HUD panel, floor tiles, solid cells, walls and inch rulers."""
         settings = self.settings
-        maze = self.sim.maze
+        maze = self.maze
         r.fill(settings.background_color)
         r.draw_rect((0, 0, size[0], PANEL_HEIGHT), tint(settings.background_color, 0.6, (0, 0, 0)))
         tile = maze.tile
@@ -171,7 +134,7 @@ class ScenePainter:
         size = min(16, int(border))
         if size < 10:
             return
-        maze = self.sim.maze
+        maze = self.maze
         for c in range(maze.cols + 1):
             x, y = view.point(c * maze.cell, 0)
             label = f"{c * maze.cell:g}" + (" in" if c == 0 else "")
@@ -182,45 +145,34 @@ class ScenePainter:
 
     # ----------------------------------------------------------------- dynamic layer
 
-    def paint_dynamic(self, r: Renderer, view: View, ghost: FloatArray | None = None) -> None:
+    def paint_dynamic(self, r: Renderer, view: View, snap: Snapshot) -> None:
         """Block, robot (with a heading mark), visible devices, measurements, drag ghost."""
-        sim = self.sim
         settings = self.settings
-        block = sim.block
-        block_px = view.points(block.polygon)
+        block_px = view.points(snap.block)
         r.draw_polygon(block_px, settings.block_color)
         r.draw_polygon(
             block_px,
             tint(settings.block_color, 0.5, (0, 0, 0)),
             view.width(settings.block_thickness),
         )
-        robot = sim.robot
-        stack = self._robot_shape
-        if stack is None or stack.robot is not robot:  # first frame, or after a reset
-            stack = self._robot_shape = RobotShape.of(robot)
-        pose = robot.pose
-        place_polygon(stack.local, pose.x, pose.y, pose.heading, stack.world)
-        points = view.points(stack.world)
-        body = points[: stack.body]
+        layout = snap.layout
+        points = view.points(snap.robot)
+        body = points[: layout.body]
         thickness = view.width(settings.robot_thickness)
         r.draw_polygon(body, self.robot_fill)
         r.draw_polygon(body, settings.robot_color, thickness)
-        r.draw_segment(points[stack.body], points[stack.body + 1], settings.robot_color, thickness)
-        for start, stop, color in stack.devices:
+        mark = layout.body
+        r.draw_segment(points[mark], points[mark + 1], settings.robot_color, thickness)
+        for start, stop, color in layout.devices:
             r.draw_polygon(points[start:stop], color, 2)
         label_size = max(10, round(view.ppi * 0.9))
-        for index, text, color in stack.labels:
+        for index, text, color in layout.labels:
             r.draw_text(text, points[index], color, label_size, centered=True)
         line = max(1, round(view.ppi / 8))  # 2 px at the default 16 ppi: visible on white tiles
-        for device in robot.devices.values():
-            for shape in device.shapes(sim):
-                if isinstance(shape, Segment):
-                    r.draw_segment(
-                        view.point(*shape.start), view.point(*shape.end), shape.color, line
-                    )
-                elif isinstance(shape, Circle):
-                    r.draw_circle(
-                        view.point(*shape.center), shape.radius * view.ppi, shape.color, 2
-                    )
-        if ghost is not None:
-            r.draw_polygon(view.points(ghost), GHOST_COLOR, 2)
+        for shape in snap.shapes:
+            if isinstance(shape, Segment):
+                r.draw_segment(view.point(*shape.start), view.point(*shape.end), shape.color, line)
+            elif isinstance(shape, Circle):
+                r.draw_circle(view.point(*shape.center), shape.radius * view.ppi, shape.color, 2)
+        if snap.ghost is not None:
+            r.draw_polygon(view.points(snap.ghost), GHOST_COLOR, 2)

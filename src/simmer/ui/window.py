@@ -1,30 +1,72 @@
-"""The window: one :meth:`Window.frame` per drawn frame reads the events, draws and flips.
+"""The window: pygame in the main thread, the simulation in its own thread.
 
-A :class:`~simmer.runner.Runner` calls :meth:`Window.frame` as its ``on_frame`` hook; tests call
-it directly (posting pygame events and stepping the simulation themselves).
+Drawing never starves the control link. :meth:`Window.run` starts the simulation thread, which
+runs :meth:`Runner.run <simmer.runner.Runner.run>` (stepping, and answering every transport the
+moment a message arrives) with :meth:`Bridge.sync <simmer.ui.bridge.Bridge.sync>` as its
+``on_frame`` hook, and keeps pygame in the calling (main) thread, as macOS requires. Each
+:meth:`Window.frame` reads the events and turns them into actions posted to the bridge (it never
+calls the :class:`~simmer.world.Simulation`), draws the latest
+:class:`~simmer.ui.snapshot.Snapshot` and flips, however long the flip blocks (vsync, a slow X
+server). Esc, closing the window or Ctrl-C stops and joins the simulation thread.
+
+Tests drive both sides in one thread for determinism: post events, :meth:`Window.frame`,
+``bridge.sync()``, step the simulation.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import pygame
 
 from simmer.errors import SimmerError
-from simmer.geometry import FloatArray, Pose, point_in_polygon
-from simmer.ui.hud import CommandLog, Stopwatch, paint_help, paint_hud, paint_hud_static
+from simmer.geometry import Pose, point_in_polygon
+from simmer.ui.bridge import (
+    SPEEDS,
+    Bridge,
+    ChangeSpeed,
+    Controls,
+    EndDrag,
+    HoldKeys,
+    LocalControls,
+    PlaceRobot,
+    Quit,
+    Reset,
+    StepOnce,
+    TogglePause,
+    faster,
+    slower,
+)
+from simmer.ui.hud import paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
+from simmer.ui.snapshot import Snapshot
 from simmer.world import Simulation
 
 if TYPE_CHECKING:
     from simmer.runner import Runner
 
-SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
-"""The speed factors ``+`` and ``-`` step through."""
+__all__ = [
+    "SPEEDS",
+    "Controls",
+    "Drag",
+    "LocalControls",
+    "Window",
+    "faster",
+    "render_scene",
+    "run_window",
+    "slower",
+    "static_layer",
+]
+
+DISPLAY_RATE = 60.0
+"""Frames per second at which the window reads events when no new snapshot arrives."""
+JOIN_TIMEOUT = 10.0
+"""Seconds to wait for the simulation thread to stop before giving up on it."""
 DRIVE_KEYS = {
     pygame.K_w: "w",
     pygame.K_a: "a",
@@ -38,31 +80,7 @@ SLOWER_KEYS = (pygame.K_MINUS, pygame.K_KP_MINUS)
 STEP_KEYS = (pygame.K_PERIOD, pygame.K_KP_PERIOD)
 
 
-class Controls(Protocol):
-    """What the window asks of the loop that steps the simulation (the Runner has these)."""
-
-    paused: bool
-    speed: float | None
-
-    def step_once(self) -> None:
-        """Advance one step."""
-        ...
-
-
-@dataclass
-class LocalControls:
-    """Pause and speed state when no runner drives the window (tests, :func:`run_window`)."""
-
-    sim: Simulation
-    paused: bool = False
-    speed: float | None = 1.0
-
-    def step_once(self) -> None:
-        """Advance one step."""
-        self.sim.step()
-
-
-@dataclass
+@dataclass(frozen=True)
 class Drag:
     """A mouse drag of the robot: which button, where it began, the robot's pose then."""
 
@@ -71,56 +89,40 @@ class Drag:
     pose: Pose
 
 
-def faster(speed: float | None) -> float | None:
-    """The next speed up (``None``, as fast as possible, stays)."""
-    if speed is None:
-        return None
-    return next((s for s in SPEEDS if s > speed * 1.001), SPEEDS[-1])
-
-
-def slower(speed: float | None) -> float:
-    """The next speed down."""
-    if speed is None:
-        return SPEEDS[-1]
-    return next((s for s in reversed(SPEEDS) if s < speed * 0.999), SPEEDS[0])
-
-
 class Window:
-    """Draws a simulation and turns keys and mouse into actions on it.
+    """Draws a bridge's snapshots and turns keys and mouse into actions posted to it.
 
     ``surface``: draw there instead of opening a window (off-screen rendering, benchmarks).
     """
 
     def __init__(
         self,
-        sim: Simulation,
+        bridge: Bridge,
         *,
         size: tuple[int, int] | None = None,
         surface: pygame.Surface | None = None,
     ) -> None:
-        self.sim = sim
+        self.bridge = bridge
+        self.scene = bridge.scene
         pygame.display.init()
         self.text = TextCache()
         self._own_display = surface is None
         if surface is None:
-            pygame.display.set_caption(f"SimMeR - {sim.config.source}")
-            surface = pygame.display.set_mode(size or default_window_size(sim), pygame.RESIZABLE)
+            pygame.display.set_caption(f"SimMeR - {self.scene.config.source}")
+            surface = pygame.display.set_mode(
+                size or default_window_size(self.scene), pygame.RESIZABLE
+            )
         self.screen = surface
         self.renderer = PygameRenderer(surface, self.text)
-        self.painter = ScenePainter(sim)
-        self.local = LocalControls(sim)
-        self.stopwatch = Stopwatch(sim)
-        self.commands = CommandLog()
-        sim.add_observer(self.stopwatch)
-        sim.add_observer(self.commands)
+        self.painter = ScenePainter(self.scene)
         self.held: set[str] = set()
         self.show_help = False
         self.drag: Drag | None = None
-        self.ghost: FloatArray | None = None
         self.static = pygame.Surface((1, 1))
         self.view = View(1.0, 0.0, 0.0)
         self._drawn: list[pygame.Rect] = []  # what the last frame drew over the static layer
         self._updated: list[pygame.Rect] | None = None  # to show on screen; None: everything
+        self._shown: Snapshot | None = None  # the snapshot on screen, if nothing else changed
         self.layout()
 
     # ----------------------------------------------------------------- layout
@@ -128,37 +130,39 @@ class Window:
     def layout(self) -> None:
         """Fit the scene to the current surface size and repaint the cached static layer."""
         size = self.screen.get_size()
-        self.view = View.fit(self.sim, size)
+        self.view = View.fit(self.scene, size)
         self.static = static_layer(size, self.screen)
         static = PygameRenderer(self.static, self.text)
         self.painter.paint_static(static, self.view, size)
-        paint_hud_static(static, self.sim, size[0])
+        paint_hud_static(static, self.scene, size[0])
         self._drawn = [self.static.get_rect()]
+        self._shown = None
 
-    # ----------------------------------------------------------------- the frame hook
+    # ----------------------------------------------------------------- one frame
 
-    def frame(self, controls: Controls | None = None) -> bool:
-        """Handle pending events, draw and show one frame; False when the user quits.
-
-        ``controls`` is the runner (its ``on_frame`` hook passes itself); None uses the
-        window's own :attr:`local` controls.
-        """
-        ctl = controls if controls is not None else self.local
+    def frame(self) -> bool:
+        """Handle pending events, draw the latest snapshot and show it; False when the user
+        quits. Skips drawing and flipping if neither the snapshot nor the window changed."""
         for event in pygame.event.get():
-            if not self.handle(event, ctl):
+            if not self.handle(event):
+                self.bridge.post(Quit())
                 return False
-        self.draw(ctl)
+        snap = self.bridge.latest
+        if snap is self._shown:
+            return True
+        self.draw(snap)
         if self._own_display:
             pygame.display.update(self._updated)
         return True
 
-    def draw(self, controls: Controls | None = None) -> None:
-        """Draw the frame on the surface (no flip).
+    def draw(self, snap: Snapshot | None = None) -> None:
+        """Draw a snapshot (default: the bridge's latest) on the surface, without a flip.
 
         Only what the previous frame drew is restored from the cached static layer, so a frame
         costs the size of the robot, rays and HUD values, not of the window.
         """
-        ctl = controls if controls is not None else self.local
+        if snap is None:
+            snap = self.bridge.latest
         screen = self.screen
         static = self.static
         previous = self._drawn
@@ -170,38 +174,30 @@ class Window:
                 screen.blit(static, rect, rect)
         r = self.renderer
         r.dirty.clear()
-        self.painter.paint_dynamic(r, self.view, self.ghost)
-        clients = getattr(ctl, "clients", None)
-        paint_hud(
-            r,
-            self.sim,
-            held=self.held,
-            paused=ctl.paused,
-            speed=ctl.speed,
-            stopwatch=self.stopwatch,
-            commands=self.commands.entries,
-            clients=list(clients) if clients is not None else None,
-        )
+        self.painter.paint_dynamic(r, self.view, snap)
+        paint_hud(r, snap)
         if self.show_help:
             paint_help(r, screen.get_size())
         self._drawn = merge_rects(r.dirty)
         self._updated = None if everything else previous + self._drawn
+        self._shown = snap
 
     # ----------------------------------------------------------------- events
 
-    def handle(self, event: pygame.event.Event, controls: Controls) -> bool:
-        """Act on one pygame event; False means quit."""
+    def handle(self, event: pygame.event.Event) -> bool:
+        """Act on one pygame event (posting actions to the bridge); False means quit."""
         kind = event.type
+        self._shown = None  # whatever it was, draw the next frame
         if kind == pygame.QUIT:
             return False
         if kind == pygame.KEYDOWN:
-            return self._key_down(event, controls)
+            return self._key_down(event)
         if kind == pygame.KEYUP and event.key in DRIVE_KEYS:
             self.held.discard(DRIVE_KEYS[event.key])
-            self.sim.set_manual_keys(self.held)
+            self.bridge.post(HoldKeys(frozenset(self.held)))
         elif kind == pygame.WINDOWFOCUSLOST and self.held:
             self.held.clear()
-            self.sim.set_manual_keys(self.held)
+            self.bridge.post(HoldKeys(frozenset()))
         elif kind == pygame.WINDOWEXPOSED:
             self._drawn = [self.static.get_rect()]  # redraw and show the whole window
         elif kind == pygame.VIDEORESIZE and self._own_display:
@@ -214,28 +210,27 @@ class Window:
             self._drag_to(event.pos)
         elif kind == pygame.MOUSEBUTTONUP and self.drag is not None:
             self._drag_to(event.pos)
-            if self.sim.robot.pose != self.drag.pose:
-                self.stopwatch.reset()
+            self.bridge.post(EndDrag(self.drag.pose))
             self.drag = None
-            self.ghost = None
         return True
 
-    def _key_down(self, event: pygame.event.Event, controls: Controls) -> bool:
+    def _key_down(self, event: pygame.event.Event) -> bool:
         key = event.key
         char = getattr(event, "unicode", "")
+        post = self.bridge.post
         if key == pygame.K_ESCAPE:
             return False
         if key in DRIVE_KEYS:
             self.held.add(DRIVE_KEYS[key])
-            self.sim.set_manual_keys(self.held)
+            post(HoldKeys(frozenset(self.held)))
         elif key == pygame.K_SPACE:
-            controls.paused = not controls.paused
-        elif key in STEP_KEYS and controls.paused:
-            controls.step_once()
+            post(TogglePause())
+        elif key in STEP_KEYS:
+            post(StepOnce())  # only steps while paused
         elif key in FASTER_KEYS or char == "+":
-            controls.speed = faster(controls.speed)
+            post(ChangeSpeed(faster=True))
         elif key in SLOWER_KEYS or char == "-":
-            controls.speed = slower(controls.speed)
+            post(ChangeSpeed(faster=False))
         elif key == pygame.K_r:
             self.reset()
         elif key == pygame.K_h:
@@ -243,20 +238,18 @@ class Window:
         return True
 
     def reset(self) -> None:
-        """Robot, block, devices, time and stopwatch back to the start; drive keys released."""
+        """Ask for robot, block, devices, time and stopwatch back at the start; keys released."""
         self.held.clear()
         self.drag = None
-        self.ghost = None
-        self.sim.reset()
-        self.stopwatch.reset()
+        self.bridge.post(Reset())
 
     # ----------------------------------------------------------------- mouse
 
     def _drag_start(self, pos: tuple[int, int], button: int) -> None:
         x, y = self.view.to_world(*pos)
-        robot = self.sim.robot
-        if point_in_polygon(x, y, robot.polygon()):
-            self.drag = Drag(button, (x, y), robot.pose)
+        snap = self.bridge.latest
+        if point_in_polygon(x, y, snap.outline):
+            self.drag = Drag(button, (x, y), snap.pose)
 
     def _drag_to(self, pos: tuple[int, int]) -> None:
         drag = self.drag
@@ -269,18 +262,60 @@ class Window:
             before = math.atan2(drag.start[1] - start.y, drag.start[0] - start.x)
             now = math.atan2(y - start.y, x - start.x)
             target = Pose(start.x, start.y, start.heading + math.degrees(now - before))
-        if self.sim.place_robot(*target):
-            self.ghost = None
-        else:
-            self.ghost = self.sim.robot.polygon(target)
+        self.bridge.post(PlaceRobot(target))
+
+    # ----------------------------------------------------------------- the two threads
+
+    def run(
+        self,
+        runner: Runner,
+        *,
+        until: float | None = None,
+        stop: threading.Event | None = None,
+    ) -> None:
+        """Step and serve ``runner`` in a simulation thread; draw here until the user quits,
+        ``stop`` is set, or the runner reaches simulated ``until`` seconds.
+
+        ``runner.sim`` must be the bridge's simulation. Ctrl-C (KeyboardInterrupt in this
+        thread) quits like Esc. An exception in the simulation thread is raised here.
+        """
+        if runner.sim is not self.bridge.sim:
+            raise ValueError("the runner steps another simulation than the window's bridge")
+        stop = stop if stop is not None else threading.Event()
+        failure: list[BaseException] = []
+
+        def simulate() -> None:
+            try:
+                runner.run(on_frame=self.bridge.sync, stop_event=stop, until=until)
+                self.bridge.sync(runner)  # the final state, for whoever looks after the run
+            except BaseException as exc:  # re-raised in the window thread
+                failure.append(exc)
+            finally:
+                stop.set()
+
+        thread = threading.Thread(target=simulate, name="simmer-simulation", daemon=True)
+        thread.start()
+        bridge = self.bridge
+        try:
+            while not stop.is_set():
+                bridge.forget()
+                if not self.frame():
+                    break
+                # Draw each snapshot as it comes (the runner publishes at most 60 a second; a
+                # vsynced flip paces this loop too); read the events at least that often.
+                bridge.wait(1.0 / DISPLAY_RATE)
+        except KeyboardInterrupt:  # Ctrl-C in the terminal: close quietly, like Esc
+            pass
+        finally:
+            stop.set()
+            thread.join(JOIN_TIMEOUT)
+        if failure:
+            raise failure[0]
 
     # ----------------------------------------------------------------- lifecycle
 
     def close(self) -> None:
-        """Stop observing the simulation and close the window."""
-        for observer in (self.stopwatch, self.commands):
-            if observer in self.sim.observers:
-                self.sim.observers.remove(observer)
+        """Close the window (the bridge is closed by whoever made it)."""
         if self._own_display:
             pygame.display.quit()
 
@@ -301,27 +336,32 @@ def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surf
     """Draw one frame off-screen at the default size; save it as an image if ``path`` is given."""
     pygame.display.init()
     surface = pygame.Surface(default_window_size(sim))
-    window = Window(sim, surface=surface)
+    bridge = Bridge(sim)
+    window = Window(bridge, surface=surface)
     window.draw()
     window.close()
+    bridge.close()
     if path is not None:
         pygame.image.save(surface, str(path))
     return surface
 
 
-def run_window(runner: Runner, until: float | None = None) -> None:
-    """Open a window on the runner's simulation; run until the user quits (or simulated
-    ``until`` seconds).
+def run_window(
+    runner: Runner, until: float | None = None, stop: threading.Event | None = None
+) -> None:
+    """Open a window on the runner's simulation; run until the user quits, ``stop`` is set, or
+    simulated ``until`` seconds (see :meth:`Window.run`).
 
     Raises :class:`~simmer.errors.SimmerError` if no window can be opened (no display).
     """
+    bridge = Bridge(runner.sim)
     try:
-        window = Window(runner.sim)
+        window = Window(bridge)
     except pygame.error as exc:
+        bridge.close()
         raise SimmerError(f"cannot open a window ({exc}); use --headless") from None
     try:
-        runner.run(on_frame=window.frame, until=until)
-    except KeyboardInterrupt:  # Ctrl-C in the terminal: close quietly, like Esc
-        pass
+        window.run(runner, until=until, stop=stop)
     finally:
         window.close()
+        bridge.close()

@@ -1,0 +1,240 @@
+"""The hand-over between the window thread and the simulation thread.
+
+The window never calls the :class:`~simmer.world.Simulation` (DESIGN habit 3). It :meth:`posts
+<Bridge.post>` small immutable actions (keys held, reset, pause, step, speed, place the robot,
+quit) on a queue; the thread that owns the simulation calls :meth:`Bridge.sync` between steps
+(it is the :class:`~simmer.runner.Runner`'s ``on_frame`` hook, at most ~60 times a second), which
+applies them and publishes a fresh :class:`~simmer.ui.snapshot.Snapshot` by one reference
+assignment to :attr:`Bridge.latest`. Nothing mutable is shared: the queue is thread-safe, the
+snapshot never changes.
+
+Tests can run both sides in one thread (post, ``sync``, draw) for determinism.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+from simmer.geometry import FloatArray, Pose
+from simmer.ui.hud import CommandLog, Stopwatch
+from simmer.ui.snapshot import RobotLayout, Snapshot, StaticScene, frozen_array
+from simmer.world import Simulation
+
+SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
+"""The speed factors ``+`` and ``-`` step through."""
+
+
+def faster(speed: float | None) -> float | None:
+    """The next speed up (``None``, as fast as possible, stays)."""
+    if speed is None:
+        return None
+    return next((s for s in SPEEDS if s > speed * 1.001), SPEEDS[-1])
+
+
+def slower(speed: float | None) -> float:
+    """The next speed down."""
+    if speed is None:
+        return SPEEDS[-1]
+    return next((s for s in reversed(SPEEDS) if s < speed * 0.999), SPEEDS[0])
+
+
+class Controls(Protocol):
+    """What the bridge asks of the loop that steps the simulation (the Runner has these)."""
+
+    paused: bool
+    speed: float | None
+
+    @property
+    def clients(self) -> Sequence[str] | None:
+        """Connected clients (None: nothing is served)."""
+        ...
+
+    def step_once(self) -> None:
+        """Advance one step."""
+        ...
+
+
+@dataclass
+class LocalControls:
+    """Pause and speed state when no runner drives the simulation (tests, off-screen drawing)."""
+
+    sim: Simulation
+    paused: bool = False
+    speed: float | None = 1.0
+    clients: Sequence[str] | None = None
+
+    def step_once(self) -> None:
+        """Advance one step."""
+        self.sim.step()
+
+
+# ----------------------------------------------------------------- actions
+
+
+@dataclass(frozen=True)
+class HoldKeys:
+    """Drive by hand with exactly these keys held (subset of ``wasdqe``)."""
+
+    keys: frozenset[str]
+
+
+@dataclass(frozen=True)
+class Reset:
+    """Robot, block, devices, time and stopwatch back to the start; drive keys released."""
+
+
+@dataclass(frozen=True)
+class TogglePause:
+    """Pause, or resume."""
+
+
+@dataclass(frozen=True)
+class StepOnce:
+    """One step, if paused."""
+
+
+@dataclass(frozen=True)
+class ChangeSpeed:
+    """One speed factor up (``faster``) or down."""
+
+    faster: bool
+
+
+@dataclass(frozen=True)
+class PlaceRobot:
+    """Move the robot there if it fits; if not, the snapshot shows a ghost outline there."""
+
+    pose: Pose
+
+
+@dataclass(frozen=True)
+class EndDrag:
+    """A drag that began with the robot at ``start`` ended: clear the ghost; if the robot moved,
+    restart the stopwatch."""
+
+    start: Pose
+
+
+@dataclass(frozen=True)
+class Quit:
+    """Stop the simulation loop."""
+
+
+Action = HoldKeys | Reset | TogglePause | StepOnce | ChangeSpeed | PlaceRobot | EndDrag | Quit
+
+
+class Bridge:
+    """Owns the window's view of one simulation: see the module doc.
+
+    Build it in the thread that owns ``sim``, before any other thread starts; after that only
+    :meth:`post` and :attr:`latest` may be used from the window thread.
+    """
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        self.scene = StaticScene.of(sim)
+        """Configuration and maze: safe to read from any thread."""
+        self.local = LocalControls(sim)
+        """Pause and speed when :meth:`sync` is called without a runner."""
+        self.stopwatch = Stopwatch(sim)
+        self.commands = CommandLog()
+        sim.add_observer(self.stopwatch)
+        sim.add_observer(self.commands)
+        self._actions: queue.SimpleQueue[Action] = queue.SimpleQueue()
+        self._ghost: FloatArray | None = None
+        self._robot = sim.robot
+        self._layout = RobotLayout.of(sim.robot)
+        self._fresh = threading.Event()
+        self.latest: Snapshot = self._snapshot(self.local)
+        """The newest snapshot (replaced whole, never changed)."""
+
+    # ----------------------------------------------------------------- the window side
+
+    def post(self, action: Action) -> None:
+        """Queue an action for the simulation thread (any thread; never blocks)."""
+        self._actions.put(action)
+
+    def forget(self) -> None:
+        """Mark the current snapshot as seen: :meth:`wait` then waits for a newer one."""
+        self._fresh.clear()
+
+    def wait(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for a snapshot newer than the last :meth:`forget`."""
+        return self._fresh.wait(timeout)
+
+    # ----------------------------------------------------------------- the simulation side
+
+    def sync(self, controls: Controls | None = None) -> bool:
+        """Apply the queued actions, publish a snapshot; False if the window asked to quit.
+
+        Called by the thread that owns the simulation (the Runner's ``on_frame`` hook passes
+        itself as ``controls``; None uses :attr:`local`).
+        """
+        ctl = controls if controls is not None else self.local
+        keep_running = True
+        while True:
+            try:
+                action = self._actions.get_nowait()
+            except queue.Empty:
+                break
+            if isinstance(action, Quit):
+                keep_running = False
+            else:
+                self._apply(action, ctl)
+        self.latest = self._snapshot(ctl)
+        self._fresh.set()
+        return keep_running
+
+    def _apply(self, action: Action, ctl: Controls) -> None:
+        sim = self.sim
+        if isinstance(action, HoldKeys):
+            sim.set_manual_keys(action.keys)
+        elif isinstance(action, Reset):
+            self._ghost = None
+            sim.reset()
+            self.stopwatch.reset()
+        elif isinstance(action, TogglePause):
+            ctl.paused = not ctl.paused
+        elif isinstance(action, StepOnce):
+            if ctl.paused:
+                ctl.step_once()
+        elif isinstance(action, ChangeSpeed):
+            ctl.speed = faster(ctl.speed) if action.faster else slower(ctl.speed)
+        elif isinstance(action, PlaceRobot):
+            target = action.pose
+            if sim.place_robot(*target):
+                self._ghost = None
+            else:
+                self._ghost = frozen_array(sim.robot.polygon(target).copy())
+        elif isinstance(action, EndDrag):
+            self._ghost = None
+            if sim.robot.pose != action.start:
+                self.stopwatch.reset()
+
+    def _snapshot(self, ctl: Controls) -> Snapshot:
+        sim = self.sim
+        if sim.robot is not self._robot:  # after a reset
+            self._robot = sim.robot
+            self._layout = RobotLayout.of(sim.robot)
+        watch = self.stopwatch
+        return Snapshot.of(
+            sim,
+            self._layout,
+            paused=ctl.paused,
+            speed=ctl.speed,
+            watch_elapsed=watch.elapsed(),
+            watch_stopped=watch.stop is not None,
+            commands=self.commands.entries,
+            clients=ctl.clients,
+            ghost=self._ghost,
+        )
+
+    def close(self) -> None:
+        """Stop observing the simulation (once its thread has stopped)."""
+        for observer in (self.stopwatch, self.commands):
+            if observer in self.sim.observers:
+                self.sim.observers.remove(observer)
