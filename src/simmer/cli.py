@@ -114,43 +114,14 @@ def run(
         _report_config_error(exc)
         raise typer.Exit(1) from None
     out.print(summarize(sim.config), markup=False)
-    if not headless:
-        from simmer.errors import SimmerError
-        from simmer.runner import Runner
-        from simmer.transport import Link
-        from simmer.ui import run_window
-
-        out.print(f"noise seed {sim.seed}; window open (press h for help)", markup=False)
-        runner = Runner(sim, speed=pace)
-        try:
-            with Link(
-                runner.bus,
-                sim.config.settings,
-                host=host,
-                port_rx=port_rx,
-                port_tx=port_tx,
-                stream_port=port,
-                serial=serial,
-                serial_link=serial_link,
-            ) as link:
-                for line in link.describe():
-                    out.print(line, markup=False)
-                run_window(runner, until=seconds)
-        except SimmerError as exc:
-            err.print(f"[bold red]{exc}[/]")
-            raise typer.Exit(1) from None
-        except OSError as exc:
-            err.print(f"[bold red]cannot serve: {exc}[/] (is another simmer running?)")
-            raise typer.Exit(1) from None
-        finally:
-            runner.bus.close()
-        return
-    from simmer.serve import run_headless
-
     out.print(f"noise seed {sim.seed}", markup=False)
+    from simmer.errors import SimmerError
+    from simmer.serve import serve
+
     try:
-        run_headless(
+        serve(
             sim,
+            window=not headless,
             speed=pace,
             seconds=seconds,
             host=host,
@@ -161,6 +132,9 @@ def run(
             serial_link=serial_link,
             echo=lambda line: out.print(line, markup=False),
         )
+    except SimmerError as exc:
+        err.print(f"[bold red]{exc}[/]")
+        raise typer.Exit(1) from None
     except OSError as exc:
         err.print(f"[bold red]cannot serve: {exc}[/] (is another simmer running?)")
         raise typer.Exit(1) from None

@@ -1,7 +1,6 @@
-"""``simmer run --headless``: serve every transport and run the loop until Ctrl-C or a time limit.
+"""``simmer run``: serve every transport and run the loop, with the window or headless.
 
-Kept out of ``cli.py`` so the window (which shares the :class:`~simmer.runner.Runner`) and the
-tests can use the same pieces.
+Kept out of ``cli.py`` so the window, the headless run and the tests share one path.
 """
 
 from __future__ import annotations
@@ -30,9 +29,10 @@ def parse_speed(text: str) -> float | None:
     return value
 
 
-def run_headless(
+def serve(
     sim: Simulation,
     *,
+    window: bool,
     speed: float | None = 1.0,
     seconds: float | None = None,
     host: str | None = None,
@@ -43,7 +43,12 @@ def run_headless(
     serial_link: Path | None = None,
     echo: Callable[[str], None] = print,
 ) -> Runner:
-    """Serve and step ``sim`` until Ctrl-C or ``seconds`` of simulated time; returns the runner."""
+    """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
+    Ctrl-C) or ``seconds`` of simulated time pass, with a window or headless.
+
+    Raises ``OSError`` if a port cannot be opened and :class:`~simmer.errors.SimmerError` if
+    no window can be opened. Returns the runner (its history, for callers and tests).
+    """
     runner = Runner(sim, speed=speed)
     link = Link(
         runner.bus,
@@ -55,15 +60,21 @@ def run_headless(
         serial=serial,
         serial_link=serial_link,
     )
-    with link:
-        for line in link.describe():
-            echo(line)
-        pace = "as fast as possible" if speed is None else f"{speed:g}x real time"
-        echo(f"running headless, {pace}; Ctrl-C to stop")
-        try:
-            runner.run(until=seconds)
-        except KeyboardInterrupt:
-            echo("stopped")
-        finally:
-            runner.bus.close()
+    try:
+        with link:
+            for line in link.describe():
+                echo(line)
+            if window:
+                from simmer.ui import run_window
+
+                echo("window open (press h for help)")
+                run_window(runner, until=seconds)
+            else:
+                pace = "as fast as possible" if speed is None else f"{speed:g}x real time"
+                echo(f"running headless, {pace}; Ctrl-C to stop")
+                runner.run(until=seconds)
+    except KeyboardInterrupt:
+        echo("stopped")
+    finally:
+        runner.bus.close()
     return runner
