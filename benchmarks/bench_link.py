@@ -70,6 +70,17 @@ def clients_for(kind: str, where: dict[str, Any]) -> Callable[[], Client]:
     return lambda: connect(serial=where["serial"], timeout=5)
 
 
+REPEATS = 3
+"""Each measurement runs this many times; the table shows the run with the most queries/s
+(the one least disturbed by other processes), as the core benchmark takes the best of five."""
+
+
+def best_of(make: Callable[[], Client], clients: int, queries: int) -> dict[str, float]:
+    """:func:`measure` repeated :data:`REPEATS` times; the run with the most queries/s."""
+    runs = [measure(make, clients, queries) for _ in range(REPEATS)]
+    return max(runs, key=lambda run: run["qps"])
+
+
 def measure(make: Callable[[], Client], clients: int, queries: int) -> dict[str, float]:
     """``queries`` reads of u0 spread over ``clients`` threads: latency stats and queries/s."""
     latencies: list[float] = []
@@ -134,8 +145,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
                 if kind == "serial" and clients > 1:
                     continue  # one serial port, one program (as on the robot)
                 queries = args.queries if kind != "two-port" else args.queries // 4
-                stats = measure(clients_for(kind, where), clients, queries)
+                stats = best_of(clients_for(kind, where), clients, queries)
                 rows.append({"transport": kind, "clients": clients, **stats})
+    print(f"control link (best of {REPEATS} runs of each)")
     print(f"{'transport':<11} {'clients':>7} {'median ms':>10} {'p95 ms':>8} {'queries/s':>10}")
     for row in rows:
         print(
