@@ -299,12 +299,15 @@ def test_stopwatch_times_the_trip_to_the_block(caplog: pytest.LogCaptureFixture)
     assert watch.elapsed() is None
 
 
-def test_run_window_quits_on_escape() -> None:
+def test_run_window_quits_on_escape(caplog: pytest.LogCaptureFixture) -> None:
     sim = Simulation.from_config()
     pygame.display.init()
     key(pygame.K_ESCAPE)
-    run_window(Runner(sim, speed=None))
+    with caplog.at_level(logging.WARNING, logger="simmer.ui"):
+        run_window(Runner(sim, speed=None))
     assert not sim.observers  # the window let go of the simulation
+    # With no screen (the dummy driver), the student is told why nothing shows.
+    assert "no screen found (SDL video driver 'dummy')" in caplog.text
 
 
 def test_window_and_control_programs_share_one_simulation() -> None:

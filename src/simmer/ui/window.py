@@ -15,6 +15,7 @@ Tests drive both sides in one thread for determinism: post events, :meth:`Window
 
 from __future__ import annotations
 
+import logging
 import math
 import threading
 from dataclasses import dataclass
@@ -63,6 +64,10 @@ __all__ = [
     "static_layer",
 ]
 
+log = logging.getLogger("simmer.ui")
+
+HIDDEN_DRIVERS = ("offscreen", "dummy")
+"""SDL video drivers that draw nowhere visible (no display on this machine)."""
 DISPLAY_RATE = 60.0
 """Frames per second at which the window reads events when no new snapshot arrives."""
 JOIN_TIMEOUT = 10.0
@@ -360,6 +365,13 @@ def run_window(
     except pygame.error as exc:
         bridge.close()
         raise SimmerError(f"cannot open a window ({exc}); use --headless") from None
+    driver = pygame.display.get_driver()
+    if driver in HIDDEN_DRIVERS:
+        log.warning(
+            "no screen found (SDL video driver %r): the simulator runs and serves, but the "
+            "window cannot be seen; use --headless to skip drawing",
+            driver,
+        )
     try:
         window.run(runner, until=until, stop=stop)
     finally:
