@@ -48,16 +48,6 @@ def heading_vector(heading_deg: float) -> Vec2:
     return Vec2(-math.sin(rad), math.cos(rad))
 
 
-def to_world(points: FloatArray, pose: Pose) -> FloatArray:
-    """Map robot-frame points (K, 2) to the world frame at ``pose``."""
-    rad = math.radians(pose.heading)
-    c, s = math.cos(rad), math.sin(rad)
-    out = np.empty_like(points, dtype=np.float64)
-    out[:, 0] = pose.x + points[:, 0] * c - points[:, 1] * s
-    out[:, 1] = pose.y + points[:, 0] * s + points[:, 1] * c
-    return out
-
-
 def rotate(x: float, y: float, heading_deg: float) -> Vec2:
     """Rotate a robot-frame vector by ``heading_deg`` into the world frame."""
     rad = math.radians(heading_deg)

@@ -108,10 +108,6 @@ class Maze:
             distance = float(ray_segments(x, y, *direction, self.segments))
         return distance if distance <= limit else math.inf
 
-    def tile_at(self, x: float, y: float) -> tuple[int, int]:
-        """(row, column) of the floor tile under a world point."""
-        return int(math.floor(y / self.tile)), int(math.floor(x / self.tile))
-
 
 def _merged_segments(hwall: BoolArray, vwall: BoolArray, cell: float) -> FloatArray:
     """Wall segments (N, 4: x1, y1, x2, y2), collinear touching pieces merged."""
