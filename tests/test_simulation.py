@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import pickle
+import subprocess
+import sys
 from typing import Any
 
 import pytest
@@ -157,3 +159,16 @@ def test_configuration_and_simulation_pickle_for_parallel_runs() -> None:
     copy.run_until_idle()
     assert copy.robot.pose == sim.robot.pose
     assert copy.command("u0,u1,c0,i0,g0") == sim.command("u0,u1,c0,i0,g0")
+
+
+def test_the_simulation_core_never_imports_pygame() -> None:
+    code = (
+        "import sys, simmer, simmer.client, simmer.runner, simmer.transport, simmer.serve\n"
+        "sim = simmer.Simulation.from_config()\n"
+        "sim.command('w0-1,u0'); sim.run_until_idle()\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('pygame', 'simmer.ui'))))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert done.stdout.strip() == "[]"
