@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import copy
 import resource
+import subprocess
+import sys
 import time
 import tomllib
 import tracemalloc
@@ -129,6 +131,28 @@ def command_microseconds(data: dict[str, Any], message: str) -> float:
     return 1e6 / best_rate(run, 5000)
 
 
+RSS_STAGES = """
+def rss():  # peak resident set of this process (VmHWM: reset by exec, unlike ru_maxrss)
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+import numpy; stages = [rss()]
+import numba; stages.append(rss())
+import simmer; sim = simmer.Simulation.from_config(); sim.command("u0,w0-1"); sim.step(60)
+stages.append(rss())
+print(*stages)
+"""
+
+
+def memory_breakdown() -> tuple[float, float, float]:
+    """Peak RSS in MB of a fresh process after importing NumPy, then Numba, then running SimMeR."""
+    done = subprocess.run(
+        [sys.executable, "-c", RSS_STAGES], capture_output=True, text=True, check=True
+    )
+    numpy_mb, numba_mb, simmer_mb = (float(v) for v in done.stdout.split())
+    return numpy_mb, numba_mb, simmer_mb
+
+
 def memory() -> tuple[float, float]:
     """(peak RSS of this process in MB, peak Python allocations of building + running in MB)."""
     tracemalloc.start()
@@ -160,6 +184,7 @@ def main() -> dict[str, float]:
     }
     figures["big_maze_ratio"] = figures["big_ultrasonic_us"] / figures["ultrasonic_us"]
     figures["memory_mb"], figures["traced_mb"] = memory()
+    figures["rss_numpy_mb"], figures["rss_numba_mb"], figures["rss_simmer_mb"] = memory_breakdown()
     rows = [
         ("steps/s, lab rover + gyro, compass, IR, all sampled each step", "all_sensors_steps",
          ">=", "15,000 (original: 683)"),
@@ -173,6 +198,9 @@ def main() -> dict[str, float]:
         ("ultrasonic read ratio, 40 x 80 / default", "big_maze_ratio", "<=", "2"),
         ("peak RSS of the process, MB (Numba/LLVM included)", "memory_mb", "<=", "80"),
         ("peak Python allocations of a 2,000-step run, MB", "traced_mb", "", ""),
+        ("fresh process RSS, MB: Python + NumPy", "rss_numpy_mb", "", ""),
+        ("  ... + import Numba", "rss_numba_mb", "", ""),
+        ("  ... + SimMeR built, read, stepped (kernels loaded)", "rss_simmer_mb", "", ""),
     ]  # fmt: skip
     print("SimMeR core benchmark")
     for label, key, sense, target in rows:
