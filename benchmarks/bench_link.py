@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import socket
 import statistics
 import subprocess
 import sys
@@ -133,6 +134,38 @@ def real_time_duration() -> float:
     return sim.time
 
 
+ECHO_SERVER = """
+import socket, sys
+server = socket.create_server(("127.0.0.1", 0))
+print(server.getsockname()[1], flush=True)
+conn, _ = server.accept()
+conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+while data := conn.recv(4096):
+    conn.sendall(data)
+"""
+
+
+def echo_baseline(rounds: int = 3000) -> float:
+    """Median round trip (ms) of a bare Python echo in another process: the floor any
+    transport stands on, on this machine, today."""
+    proc = subprocess.Popen([sys.executable, "-c", ECHO_SERVER], stdout=subprocess.PIPE)
+    assert proc.stdout is not None
+    try:
+        port = int(proc.stdout.readline())
+        with socket.create_connection(("127.0.0.1", port)) as sock:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            times = []
+            for _ in range(rounds):
+                start = time.perf_counter()
+                sock.sendall(b"u0\n")
+                sock.recv(4096)
+                times.append(time.perf_counter() - start)
+    finally:
+        proc.stdout.close()
+        proc.wait(timeout=10)
+    return statistics.median(times) * 1e3
+
+
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     """Run every measurement, print a table, return the rows."""
     parser = argparse.ArgumentParser(description=__doc__)
@@ -154,6 +187,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
             f"{row['transport']:<11} {row['clients']:>7} {row['median_ms']:>10.3f} "
             f"{row['p95_ms']:>8.3f} {row['qps']:>10.0f}"
         )
+    print(f"bare Python echo between two processes (the floor): median {echo_baseline():.3f} ms")
     real = real_time_duration()
     with simulator("max") as where, connect(port=where["stream"]) as client:
         start = time.perf_counter()
