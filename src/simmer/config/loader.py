@@ -20,7 +20,7 @@ from typing import Any, get_args
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from simmer.config.models import DEVICE_GROUPS, DeviceSpec, Settings, SimConfig
+from simmer.config.models import DEVICE_GROUPS, DeviceSpec, Group, Settings, SimConfig
 from simmer.devices import device_kinds, get_device_kind
 from simmer.errors import ConfigError, ConfigIssue, DeviceKindError
 from simmer.geometry import Pose, place_polygon, polygon_hits_grid, polygons_overlap
@@ -219,7 +219,7 @@ def _id_problem(device_id: str) -> str | None:
 
 
 def _validate_device(
-    group: str, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
+    group: Group, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
 ) -> DeviceSpec | None:
     key = f"{group}.{device_id}"
     raw = dict(raw)
@@ -270,7 +270,7 @@ def _validate_device(
     issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in problems]
     if problems:
         return None
-    return DeviceSpec(device_id, group, str(kind_name), params)  # type: ignore[arg-type]
+    return DeviceSpec(device_id, group, str(kind_name), params)
 
 
 def _kind_list(category: str) -> str:

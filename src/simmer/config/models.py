@@ -30,7 +30,9 @@ SIMMER_DEFAULT_WALLS: tuple[tuple[int, ...], ...] = (
     (1, 1, 1, 1, 1, 1, 0, 2),
 )
 
-DEVICE_GROUPS: tuple[Literal["motors", "drives", "sensors"], ...] = ("motors", "drives", "sensors")
+Group = Literal["motors", "drives", "sensors"]
+"""The configuration table a device lives in."""
+DEVICE_GROUPS: tuple[Group, ...] = ("motors", "drives", "sensors")
 
 
 class Settings(BaseModel):
@@ -126,7 +128,7 @@ class DeviceSpec:
     """One configured device: its id, table (group), registered kind and validated settings."""
 
     id: str
-    group: Literal["motors", "drives", "sensors"]
+    group: Group
     kind: str
     params: DeviceParams
 
