@@ -13,6 +13,14 @@ from simmer.config import config_from_dict
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
+SIMMER_PY = REPO / "tests" / "fixtures" / "simmer_py"
+"""Configuration files written in the original SimMeR's style."""
+SIMMER_PY_FILES = [
+    SIMMER_PY / "default_config.py",
+    SIMMER_PY / "lab_rover_quiet.py",
+    SIMMER_PY / "lab_rover_noisy.py",
+    SIMMER_PY / "with_device" / "config.py",
+]
 LAB_SEQUENCE = [
     "w0-36", "r0-90", "w0-36", "r0-90", "w0-12", "r0--90", "w0-24", "r0--90", "w0-6", "r0-720",
 ]  # fmt: skip

@@ -12,12 +12,9 @@ from simmer.cli import app
 from simmer.config import load_config
 from simmer.config.convert import convert_simmer_py
 
-FIXTURES = Path(__file__).parent / "fixtures" / "simmer_py"
-DEFAULT = FIXTURES / "default_config.py"
-QUIET = FIXTURES / "lab_rover_quiet.py"
-NOISY = FIXTURES / "lab_rover_noisy.py"
-WITH_DEVICE = FIXTURES / "with_device" / "config.py"
-ALL = [DEFAULT, QUIET, NOISY, WITH_DEVICE]
+from helpers import SIMMER_PY_FILES
+
+DEFAULT, QUIET, NOISY, WITH_DEVICE = ALL = SIMMER_PY_FILES
 
 
 def line_with(text: str, start: str) -> str:

@@ -17,14 +17,10 @@ from simmer.config import load_config
 from simmer.config.convert import convert_simmer_py
 from simmer.errors import ConfigError
 
-from helpers import LAB_SEQUENCE
+from helpers import LAB_SEQUENCE, SIMMER_PY_FILES
+from helpers import SIMMER_PY as FIXTURES
 
-FIXTURES = Path(__file__).parent / "fixtures" / "simmer_py"
-DEFAULT = FIXTURES / "default_config.py"
-QUIET = FIXTURES / "lab_rover_quiet.py"
-NOISY = FIXTURES / "lab_rover_noisy.py"
-WITH_DEVICE = FIXTURES / "with_device" / "config.py"
-ALL = [DEFAULT, QUIET, NOISY, WITH_DEVICE]
+DEFAULT, QUIET, NOISY, WITH_DEVICE = ALL = SIMMER_PY_FILES
 B0 = "'b0': Beacon(b0_info)"
 NUM_RAYS = "'num_rays': 0"
 DIRECTION = "'motor_direction': [1, 1]"
