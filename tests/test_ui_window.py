@@ -12,7 +12,7 @@ import math
 import os
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
@@ -310,6 +310,27 @@ def test_run_window_quits_on_escape(caplog: pytest.LogCaptureFixture) -> None:
     assert "no screen found (SDL video driver 'dummy')" in caplog.text
 
 
+def serve_with_window(
+    window: Window,
+    runner: Runner,
+    program: Callable[[int], None],
+    stop: threading.Event,
+    until: float,
+) -> threading.Thread:
+    """Serve the persistent protocol and run ``window`` (this thread) with ``runner`` (its own
+    thread) while ``program(port)`` runs in a third; tear everything down; return that thread."""
+    link = Link(runner.bus, runner.sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
+    with link:
+        thread = threading.Thread(target=program, args=(link.stream.port,))
+        thread.start()
+        window.run(runner, stop=stop, until=until)
+        thread.join(TIMEOUT)
+    runner.bus.close()
+    window.close()
+    window.bridge.close()
+    return thread
+
+
 def test_window_and_control_programs_share_one_simulation() -> None:
     sim = Simulation.from_config()
     runner = Runner(sim, speed=1.0)
@@ -333,15 +354,7 @@ def test_window_and_control_programs_share_one_simulation() -> None:
         finally:
             stop.set()
 
-    link = Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
-    with link:
-        thread = threading.Thread(target=program, args=(link.stream.port,))
-        thread.start()
-        window.run(runner, stop=stop, until=120.0)
-        thread.join(TIMEOUT)
-    runner.bus.close()
-    window.close()
-    bridge.close()
+    serve_with_window(window, runner, program, stop, until=120.0)
     assert not errors
     assert replies == [[pytest.approx(39.5), pytest.approx(3.5)]]
     assert bridge.latest.commands[-1].message == "u0,u1"
@@ -380,15 +393,7 @@ def test_drawing_never_starves_the_control_link(monkeypatch: pytest.MonkeyPatch)
             release.set()
             stop.set()
 
-    link = Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
-    with link:
-        thread = threading.Thread(target=program, args=(link.stream.port,))
-        thread.start()
-        window.run(runner, stop=stop, until=600.0)
-        thread.join(TIMEOUT)
-    runner.bus.close()
-    window.close()
-    bridge.close()
+    thread = serve_with_window(window, runner, program, stop, until=600.0)
     assert not errors
     assert flips["entered"] == 1  # the window thread never got past its first flip ...
     assert [returned for _, returned in answered] == [0] * 6  # ... while all six were answered
