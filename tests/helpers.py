@@ -20,6 +20,7 @@ SIMMER_PY_FILES = [
     SIMMER_PY / "lab_rover_quiet.py",
     SIMMER_PY / "lab_rover_noisy.py",
     SIMMER_PY / "with_device" / "config.py",
+    SIMMER_PY / "tof_device" / "config.py",
 ]
 LAB_SEQUENCE = [
     "w0-36", "r0-90", "w0-36", "r0-90", "w0-12", "r0--90", "w0-24", "r0--90", "w0-6", "r0-720",

@@ -20,7 +20,7 @@ from simmer.errors import ConfigError
 from helpers import LAB_SEQUENCE, SIMMER_PY_FILES
 from helpers import SIMMER_PY as FIXTURES
 
-DEFAULT, QUIET, NOISY, WITH_DEVICE = ALL = SIMMER_PY_FILES
+DEFAULT, QUIET, NOISY, WITH_DEVICE, TOF_DEVICE = ALL = SIMMER_PY_FILES
 B0 = "'b0': Beacon(b0_info)"
 NUM_RAYS = "'num_rays': 0"
 DIRECTION = "'motor_direction': [1, 1]"
@@ -279,7 +279,7 @@ def test_exception_in_a_user_device_names_its_file(tmp_path: Path) -> None:
     shutil.copy(WITH_DEVICE, path)
     error = error_of(path)
     assert f"{path}:{line_of(path, B0)}: running" in str(error)
-    assert f"KeyError: 'frames' (beacon.py line {line_of(beacon, FRAMES)})" in str(error)
+    assert f"KeyError: 'frames' (devices/beacon.py line {line_of(beacon, FRAMES)})" in str(error)
 
 
 def test_validation_messages_carry_config_py_lines(tmp_path: Path) -> None:
@@ -352,7 +352,7 @@ def test_syntax_error_in_a_user_device_names_its_file(tmp_path: Path) -> None:
     assert (
         f"{path}:{line_of(path, 'from devices.beacon')}: running the configuration failed" in error
     )
-    assert f"(beacon.py line {line_of(beacon, 'self.frames = = 0')})" in error
+    assert f"(devices/beacon.py line {line_of(beacon, 'self.frames = = 0')})" in error
 
 
 def test_exit_in_config_is_an_error_not_an_exit(tmp_path: Path) -> None:

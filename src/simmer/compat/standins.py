@@ -8,7 +8,8 @@ removes every module it added (and anything imported from the configuration's fo
 nothing leaks into the rest of the process and pygame is never needed.
 
 The stand-in device classes do nothing but remember the information dictionary they were built
-from; :func:`captured_info` gives it back.
+from; :func:`captured_info` gives it back. The stand-in ``utilities`` module offers every public
+helper of the original's, from :mod:`simmer.compat.utilities`.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from simmer.compat import utilities
 
 # ----------------------------------------------------------------------------- pygame.math
 
@@ -190,19 +191,6 @@ def captured_info(obj: StandInDevice) -> dict[str, Any]:
 # ----------------------------------------------------------------------------- utilities
 
 
-def add_error(value: float, error: float, bounds: Sequence[float] | None = None) -> float:
-    """SimMeR's ``utilities.add_error``: percent error ``gauss(0, 2)·error·value``, clamped.
-
-    Draws from the generator of the device being simulated (set by the adapter), so a seeded
-    run stays repeatable.
-    """
-    rng: np.random.Generator = UTILITIES.rng
-    noisy = value + float(rng.normal(0.0, 2.0)) * error * value if error else value
-    if bounds is not None:
-        noisy = min(max(noisy, bounds[0]), bounds[1])
-    return noisy
-
-
 def _missing(module: str, provided: str) -> Any:
     def missing(name: str) -> Any:
         raise AttributeError(
@@ -214,9 +202,10 @@ def _missing(module: str, provided: str) -> Any:
 
 
 UTILITIES = types.ModuleType("utilities", "SimMeR 2 stand-in for SimMeR's utilities module.")
-UTILITIES.add_error = add_error  # type: ignore[attr-defined]
-UTILITIES.rng = np.random.default_rng(0)  # type: ignore[attr-defined]
-UTILITIES.__getattr__ = _missing("utilities", "add_error")  # type: ignore[method-assign]
+UTILITIES.__dict__.update({name: getattr(utilities, name) for name in utilities.__all__})
+UTILITIES.__getattr__ = _missing(  # type: ignore[method-assign]
+    "utilities", "SimMeR's public helpers (" + ", ".join(utilities.__all__) + ")"
+)
 
 
 def _module(name: str, **attrs: Any) -> types.ModuleType:

@@ -14,21 +14,22 @@ number, may have ``update(environment)``, and sets ``d_type``. The adapter kind
 The class is built on first use, from an info dictionary holding ``id``, ``position``,
 ``rotation``, ``visible`` and every other key given (``outline`` as ``pygame.math.Vector2``s).
 ``environment`` is a dictionary like SimMeR's: ``environment['ROBOT']`` (``position``,
-``rotation``, ``pose``, ``outline``, ``height``), ``environment['MAZE']`` (``walls``,
-``wall_segment_length``, ``floor_segment_length``, ``reduced_walls``),
-``environment['BLOCK']`` (``position``, ``rotation``, ``size``, ``height``, ``block_square``)
-and ``environment['TIME']`` (simulated seconds). Before each call the device's
-``position_global`` and ``rotation_global`` are set, and ``import config as CONFIG`` gives the
-running configuration's settings. Drawing methods (``draw``, ``draw_measurement``) are not called.
+``rotation``, ``pose``, ``outline``, ``height``, and ``sensors``, ``drives`` and ``motors``:
+views of every device by id, whose ``simulate(value, environment)`` asks the real device),
+``environment['MAZE']`` (``walls``, ``wall_segment_length``, ``floor_segment_length``,
+``reduced_walls``), ``environment['BLOCK']`` (``position``, ``rotation``, ``size``,
+``height``, ``block_square``) and ``environment['TIME']`` (simulated seconds). Before each call
+the device's ``position_global`` and ``rotation_global`` are set, ``import config as CONFIG``
+gives the running configuration's settings (and ``maze_dim_x``, ``maze_dim_y``), and
+``import utilities`` the original's helpers (:mod:`simmer.compat.utilities`). Drawing methods
+(``draw``, ``draw_measurement``) are not called.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import inspect
-import logging
 import sys
-import traceback
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,12 +38,11 @@ from typing import Any, ClassVar
 import numpy as np
 from pydantic import ConfigDict, Field, ValidationInfo, field_validator
 
-from simmer.compat.standins import UTILITIES, StandIns, Vector2
-from simmer.devices import Device, DeviceParams, World, register_device_kind
+from simmer.compat import utilities
+from simmer.compat.standins import StandIns, Vector2
+from simmer.devices import Device, DeviceParams, Drive, Motor, World, register_device_kind
 from simmer.devices.base import Category
-from simmer.errors import CommandError
-
-log = logging.getLogger(__name__)
+from simmer.errors import CommandError, describe_exception
 
 KIND = "simmer_device"
 
@@ -88,19 +88,6 @@ def load_module(path: Path) -> LoadedModule:
             spec.loader.exec_module(module)
         _LOADED[key] = LoadedModule(module, config)
     return _LOADED[key]
-
-
-def describe_exception(exc: BaseException, files: list[Path]) -> str:
-    """``Type: message (file.py line N)`` naming the innermost frame in one of ``files``."""
-    wanted = {f.resolve() for f in files}
-    where = ""
-    if isinstance(exc, SyntaxError) and exc.filename and Path(exc.filename).resolve() in wanted:
-        return f"SyntaxError: {exc.msg} ({Path(exc.filename).name} line {exc.lineno})"
-    for frame in reversed(traceback.extract_tb(exc.__traceback__)):
-        if Path(frame.filename).resolve() in wanted:
-            where = f" ({Path(frame.filename).name} line {frame.lineno})"
-            break
-    return f"{type(exc).__name__}: {exc}{where}"
 
 
 def check_device_class(cls: object, where: str) -> type:
@@ -159,9 +146,7 @@ class SimmerDeviceParams(DeviceParams):
         try:
             module = load_module(path).module
         except Exception as exc:
-            raise ValueError(
-                f"importing {path.name} failed: {describe_exception(exc, [path])}"
-            ) from None
+            raise ValueError(f"importing {path.name} failed: {describe_exception(exc)}") from None
         if not hasattr(module, value):
             classes = [n for n, o in vars(module).items() if inspect.isclass(o)]
             raise ValueError(f"{path.name} has no class {value!r}; it has: {', '.join(classes)}")
@@ -178,13 +163,74 @@ class SimmerDeviceParams(DeviceParams):
         return found
 
 
+class _DeviceView:
+    """One device as ``environment['ROBOT'].sensors[id]`` (or ``drives``, ``motors``) shows it.
+
+    ``simulate(value, environment)`` asks the real SimMeR 2 device, so a sensor measures, a
+    drive starts moving (+inf, or NaN while a drive is busy) and a motor gives its odometer.
+    """
+
+    def __init__(self, device: Device, world: World) -> None:
+        self._device = device
+        self._world = world
+        self.id = device.id
+        self.d_type = device.category
+        self.position = Vector2(device.position.x, device.position.y)
+        self.rotation = device.rotation
+
+    @property
+    def position_global(self) -> Vector2:
+        """Where the device is in the world now."""
+        pose = self._device.world_pose(self._world.robot.pose)
+        return Vector2(pose.x, pose.y)
+
+    @property
+    def rotation_global(self) -> float:
+        """Which way the device faces in the world now, degrees."""
+        return float(self._device.world_pose(self._world.robot.pose).heading)
+
+    def simulate(self, value: float, environment: Any = None) -> float:
+        """The device's answer to ``value`` (it sees the same world as ``environment``)."""
+        return float(self._device.simulate(value, self._world))
+
+
+class _DriveView(_DeviceView):
+    """A drive: also ``move_buffer``, the motion still to do (non-zero while moving)."""
+
+    def __init__(self, drive: Drive, world: World) -> None:
+        super().__init__(drive, world)
+        self._drive = drive
+
+    @property
+    def move_buffer(self) -> float:
+        """Inches (or degrees) of commanded motion left."""
+        return self._drive.remaining
+
+
+class _MotorView(_DeviceView):
+    """A motor: also ``odometer``, the wheel's travel so far."""
+
+    def __init__(self, motor: Motor, world: World) -> None:
+        super().__init__(motor, world)
+        self._motor = motor
+
+    @property
+    def odometer(self) -> float:
+        """Inches the wheel has turned through."""
+        return self._motor.odometer
+
+
 class _RobotView:
-    """``environment['ROBOT']``: the robot's live pose, outline and height."""
+    """``environment['ROBOT']``: the robot's live pose, outline, height and devices."""
 
     def __init__(self, world: World) -> None:
         self._world = world
-        self.outline = [Vector2(x, y) for x, y in world.robot.outline]
-        self.height = world.robot.height
+        robot = world.robot
+        self.outline = [Vector2(x, y) for x, y in robot.outline]
+        self.height = robot.height
+        self.sensors = {i: _DeviceView(d, world) for i, d in robot.sensors.items()}
+        self.drives = {i: _DriveView(d, world) for i, d in robot.drives.items()}
+        self.motors = {i: _MotorView(d, world) for i, d in robot.motors.items()}
 
     @property
     def pose(self) -> Any:
@@ -301,23 +347,24 @@ class SimmerDevice(Device):
             k: _plain(v) for k, v in params.model_dump(exclude_unset=True).items() if k not in skip
         }
         self.user_class: type | None = None
+        self.loaded: LoadedModule | None = None
         self.instance: Any = None
         self.environment: Environment | None = None
-        self.broken = False
 
     def _prepare(self, world: World) -> tuple[Any, Environment]:
         """Build the user's object on first use; refresh its global pose and the time."""
-        if self.instance is None or self.environment is None:
-            loaded = load_module(Path(self.settings.module))
-            loaded.config.__dict__.update(config_values(world))
-            self.user_class = getattr(loaded.module, self.settings.class_name)
+        if self.instance is None or self.environment is None or self.loaded is None:
+            self.loaded = load_module(Path(self.settings.module))
+            self.loaded.config.__dict__.update(config_values(world))
+            self.user_class = getattr(self.loaded.module, self.settings.class_name)
             self.instance = self.user_class(dict(self.info))
             self.environment = Environment(world)
         pose = self.world_pose(world.robot.pose)
         self.instance.position_global = Vector2(pose.x, pose.y)
         self.instance.rotation_global = pose.heading
         self.environment["TIME"] = world.time
-        UTILITIES.rng = self.rng  # type: ignore[attr-defined]
+        utilities.CONTEXT.rng = self.rng
+        utilities.CONTEXT.config = self.loaded.config
         return self.instance, self.environment
 
     def simulate(self, value: float, world: World) -> float:
@@ -335,20 +382,11 @@ class SimmerDevice(Device):
     def update(self, world: World) -> None:
         """Call the class's ``update(environment)`` each step, if it has one.
 
-        An exception is logged once and that device's updates stop, so one faulty device
-        cannot stop the simulation.
+        An exception switches the device off (the simulation logs it once and carries on).
         """
-        if self.broken:
-            return
-        try:
-            instance, environment = self._prepare(world)
-            if hasattr(instance, "update"):
-                instance.update(environment)
-        except Exception:
-            self.broken = True
-            log.exception(
-                "device %s (%s) failed; its updates stop", self.id, self.settings.class_name
-            )
+        instance, environment = self._prepare(world)
+        if hasattr(instance, "update"):
+            instance.update(environment)
 
 
 register_device_kind(KIND, SimmerDevice)
