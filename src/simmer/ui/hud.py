@@ -1,4 +1,5 @@
-"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help.
+"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help,
+and a red warning for each device switched off because its code raised.
 
 :class:`Stopwatch` and :class:`CommandLog` observe the simulation in its own thread; the painters
 read only a :class:`~simmer.ui.snapshot.Snapshot` (and the static configuration).
@@ -29,6 +30,10 @@ TEXT: Color = (235, 240, 240)
 DIM: Color = (150, 175, 175)
 LIT: Color = (255, 210, 0)
 UNLIT: Color = (60, 70, 70)
+ALARM: Color = (255, 90, 90)
+BOX: Color = (20, 30, 30)
+SWITCHED_OFF_SHOWN = 3
+"""At most this many switched-off devices are named on screen (all of them are in the log)."""
 
 HELP = (
     ("W / S", "drive forward / backward (6 in/s)"),
@@ -231,6 +236,25 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
             r.draw_text(client, (CLIENTS_X, 32 + 16 * i), TEXT, 18)
         if not clients:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
+    if snap.switched_off:
+        paint_switched_off(r, snap.switched_off)
+
+
+def paint_switched_off(r: Renderer, switched_off: tuple[tuple[str, str], ...]) -> None:
+    """One red line per device switched off, in a dark box over the top of the maze: a student
+    must notice that their device no longer answers, and why."""
+    lines = [f"{device_id} switched off: {reason}"[:120] for device_id, reason in switched_off]
+    if len(lines) > SWITCHED_OFF_SHOWN:
+        more = len(lines) - SWITCHED_OFF_SHOWN + 1
+        lines[SWITCHED_OFF_SHOWN - 1 :] = [f"... and {more} more devices switched off"]
+    hint = "switched-off devices answer NaN; the traceback is in the log; R (reset) restarts them"
+    size, step = 20, 20
+    width = 24 + size * 2 * max(len(line) for line in [*lines, hint]) // 5  # ~0.4 em a letter
+    x, y = 8, PANEL_HEIGHT + 4
+    r.draw_rect((x, y, width, 10 + step * (len(lines) + 1)), BOX)
+    for i, line in enumerate(lines):
+        r.draw_text(line, (x + 10, y + 6 + step * i), ALARM, size)
+    r.draw_text(hint, (x + 10, y + 6 + step * len(lines)), DIM, 18)
 
 
 def paint_help(r: Renderer, size: tuple[int, int]) -> None:

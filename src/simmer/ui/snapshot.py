@@ -134,6 +134,8 @@ class Snapshot:
     """Connected clients; None when no runner serves any."""
     ghost: FloatArray | None = None
     """Where a refused drag would have put the robot's outline."""
+    switched_off: tuple[tuple[str, str], ...] = ()
+    """(device id, reason) of each device switched off because its code raised."""
 
     @property
     def outline(self) -> FloatArray:
@@ -159,7 +161,7 @@ class Snapshot:
         if layout is None:
             layout = RobotLayout.of(robot)
         pose = robot.pose
-        shapes = tuple(shape for device in robot.devices.values() for shape in device.shapes(sim))
+        shapes = tuple(sim.shapes())
         return cls(
             time=sim.time,
             pose=pose,
@@ -176,4 +178,5 @@ class Snapshot:
             commands=tuple(commands),
             clients=tuple(clients) if clients is not None else None,
             ghost=ghost,
+            switched_off=tuple(sim.switched_off.items()),
         )

@@ -9,17 +9,18 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
 from simmer.config.loader import load_config
 from simmer.config.models import SimConfig
-from simmer.devices import Axes, Device, Drive, get_device_kind
-from simmer.errors import CommandError, DeviceKindError
+from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
+from simmer.errors import CommandError, DeviceKindError, describe_exception
 from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
-from simmer.protocol import STOP_ID, Command, parse_message
+from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message
 from simmer.world.events import (
     CollisionEvent,
     CommandEvent,
@@ -43,6 +44,8 @@ class Simulation:
 
     Use :meth:`from_config` to build one, :meth:`command` to talk to the robot as a control
     program would, and :meth:`step` / :meth:`run_until_idle` to let simulated time pass.
+    A device whose own code raises is switched off until :meth:`reset` (see
+    :attr:`switched_off`) instead of stopping the simulation.
     """
 
     def __init__(self, config: SimConfig, seed: int | None = None) -> None:
@@ -58,6 +61,8 @@ class Simulation:
         self._dt = 1.0 / settings.frame_rate
         self.observers: list[Observer] = []
         self._simulate_list = settings.simulate_list
+        self._lenient = settings.lenient_commands
+        self._lenient_warned: set[tuple[str, str]] = set()
         self._build()
 
     @classmethod
@@ -78,6 +83,9 @@ class Simulation:
             devices.append(kind(spec.id, spec.params, self.rng))
         start = Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
         self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
+        self._switched_off: dict[str, str] = {}
+        self._updating = list(self._robot.updating)
+        self._listed = [self._robot.sensors[i] for i in dict.fromkeys(self._simulate_list)]
         for drive in self._robot.drives.values():
             drive.bind_motors([self._robot.motors[m] for m in drive.settings.motors])
             if settings.rand_bias:
@@ -120,6 +128,13 @@ class Simulation:
         """The robot."""
         return self._robot
 
+    @property
+    def switched_off(self) -> Mapping[str, str]:
+        """Devices switched off because their code raised, by id, with the reason (e.g.
+        ``{"t0": "ZeroDivisionError: division by zero (tof.py line 12)"}``); emptied by
+        :meth:`reset`. A read-only live view."""
+        return MappingProxyType(self._switched_off)
+
     # ----------------------------------------------------------------- commands
 
     def command(self, message: str) -> list[float]:
@@ -128,11 +143,29 @@ class Simulation:
         A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
         an unknown device answers NaN and logs why.
         """
-        commands = parse_message(message)
+        commands = parse_message(message, lenient=self._lenient)
+        for command in commands:
+            if command.lenient:
+                self._warn_lenient(command)
         replies = [self.execute(command) for command in commands]
         if self.observers:
             self._emit(CommandEvent(self._time, message, tuple(replies)))
         return replies
+
+    def _warn_lenient(self, command: Command) -> None:
+        """Say once per device and rule that a command was read the originals' way."""
+        for rule in command.lenient:
+            if (command.device, rule) in self._lenient_warned:
+                continue
+            self._lenient_warned.add((command.device, rule))
+            log.warning(
+                "command %r read as %s-%g: %s, as in the original SimMeR (said once per device; "
+                "lenient_commands = false makes such commands answer NaN)",
+                command.text.strip(),
+                command.device,
+                command.value,
+                LENIENT_RULES[rule],
+            )
 
     def execute(self, command: Command) -> float:
         """Execute one parsed command and return its reply value."""
@@ -142,6 +175,9 @@ class Simulation:
         if command.device == STOP_ID:
             self._robot.stop()
             return math.inf
+        if command.device in self._switched_off:
+            log.debug("command %r: device %r is switched off", command.text, command.device)
+            return math.nan
         device = self._robot.devices.get(command.device)
         if device is None:
             log.warning("bad command %r: no device %r on the robot", command.text, command.device)
@@ -150,8 +186,8 @@ class Simulation:
             return float(device.simulate(command.value, self))
         except CommandError as exc:
             log.warning("bad command %r: %s", command.text, exc)
-        except Exception:
-            log.exception("device %r failed on command %r", command.device, command.text)
+        except Exception as exc:
+            self._switch_off(device, f"command {command.text!r}", exc)
         return math.nan
 
     # ----------------------------------------------------------------- time
@@ -192,12 +228,65 @@ class Simulation:
             self._move(dx, dy, rotation)
         self._time = (self.frame + 1) * dt
         self.frame += 1
-        for device in robot.updating:
-            device.update(self)
-        for sensor_id in self._simulate_list:
-            robot.sensors[sensor_id].simulate(0.0, self)
+        # A try costs nothing until it catches (Python >= 3.11), and switching a device off
+        # builds new lists, so these loops go on over the old ones.
+        for device in self._updating:
+            try:
+                device.update(self)
+            except Exception as exc:
+                self._switch_off(device, "update()", exc)
+        for device in self._listed:
+            try:
+                device.simulate(0.0, self)
+            except CommandError as exc:
+                self._unlist(device, exc)
+            except Exception as exc:
+                self._switch_off(device, "simulate() for simulate_list", exc)
         if self.observers:
             self._emit(StepEvent(self._time, robot.pose))
+
+    # ----------------------------------------------------------------- faulty devices
+
+    def _switch_off(self, device: Device, during: str, exc: Exception) -> None:
+        """A device's own code raised: log it once and leave the device out until reset.
+
+        Its commands then answer NaN and its update, simulate_list call and shapes are
+        skipped, so one faulty device (typically a student's plug-in) never stops the run.
+        """
+        reason = describe_exception(exc)
+        self._switched_off[device.id] = reason
+        self._updating = [d for d in self._updating if d is not device]
+        self._listed = [d for d in self._listed if d is not device]
+        log.error(
+            "device %s (kind %r, class %s) raised in %s and is switched off until reset "
+            "(its commands answer NaN): %s",
+            device.id,
+            device.kind,
+            type(device).__name__,
+            during,
+            reason,
+            exc_info=exc,
+        )
+
+    def _unlist(self, sensor: Device, exc: CommandError) -> None:
+        """A simulate_list sensor refused a plain read: stop reading it every step (said once);
+        commands to it still work."""
+        self._listed = [d for d in self._listed if d is not sensor]
+        log.warning("simulate_list: %s is no longer read every step: %s", sensor.id, exc)
+
+    def shapes(self) -> list[Shape]:
+        """Every device's latest measurement to draw; a device whose ``shapes`` raises is
+        switched off."""
+        shapes: list[Shape] = []
+        off = self._switched_off
+        for device in self._robot.devices.values():
+            if device.id in off:
+                continue
+            try:
+                shapes += device.shapes(self)
+            except Exception as exc:
+                self._switch_off(device, "shapes()", exc)
+        return shapes
 
     def _move(self, dx: float, dy: float, rotation: float) -> None:
         """Apply a robot-frame motion unless it would touch a wall or the block."""
