@@ -39,7 +39,7 @@ from simmer.world import Simulation
 sim = Simulation.from_config()
 runner = Runner(sim, speed=None if sys.argv[1] == "max" else float(sys.argv[1]))
 ports = {"port_rx": 0, "port_tx": 0, "stream_port": 0}
-with Link(runner.bus, sim.config.settings, serial=True, **ports) as link:
+with Link(runner.bus, sim.config, serial=True, **ports) as link:
     print(json.dumps({"stream": link.stream.port, "rx": link.two_port.port_rx,
                       "tx": link.two_port.port_tx, "serial": link.serial.path}), flush=True)
     stop = threading.Event()

@@ -105,7 +105,7 @@ def measure_latency(count: int = 600) -> tuple[float, float, float, float, str]:
             stop.set()
 
     try:
-        with Link(runner.bus, sim.config.settings, port_rx=0, port_tx=0, stream_port=0) as link:
+        with Link(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0) as link:
             thread = threading.Thread(target=program, args=(link.stream.port,))
             thread.start()
             window.run(runner, stop=stop)

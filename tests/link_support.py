@@ -29,7 +29,7 @@ def serving(
     stop = threading.Event()
     link = Link(
         runner.bus,
-        sim.config.settings,
+        sim.config,
         port_rx=0,
         port_tx=0,
         stream_port=0,

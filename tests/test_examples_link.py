@@ -57,6 +57,21 @@ def test_original_style_client_example(width: int, monkeypatch: pytest.MonkeyPat
         assert client.send("u1,w0-1") == [pytest.approx(3.5), math.inf]
 
 
+def test_v12_style_client_example(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = default_data() | {"protocol": "framed", "str_encoding": "ascii"}
+    client = load("simmer_v12_client")
+    typed = iter(["u0, u1", "w0:6", "zz", "quit"])
+    with serving(make_sim(data)) as (_, link):
+        monkeypatch.setattr(client, "PORT_TX", link.two_port.port_rx)
+        monkeypatch.setattr(client, "PORT_RX", link.two_port.port_tx)
+        monkeypatch.setattr("builtins.input", lambda _prompt: next(typed))
+        client.main()
+    shown = capsys.readouterr().out.splitlines()
+    assert shown[1:] == ["u0: 39.5", "u1: 3.5", "w0: True", "zz: Not Found"]
+
+
 def test_cli_run_headless_serves_until_the_time_limit() -> None:
     result = CliRunner().invoke(
         app,
@@ -65,6 +80,14 @@ def test_cli_run_headless_serves_until_the_time_limit() -> None:
     )  # fmt: skip
     assert result.exit_code == 0, result.output
     assert "persistent TCP" in result.output
+    assert "replies as packed 4-byte floats" in result.output
     assert "noise seed 7" in result.output
+    framed = CliRunner().invoke(
+        app,
+        ["run", "--headless", "--speed", "max", "--seconds", "0.1", "--port", "0",
+         "--port-rx", "0", "--port-tx", "0", "--protocol", "framed"],
+    )  # fmt: skip
+    assert framed.exit_code == 0, framed.output
+    assert "replies in SimMeR v1.2 framed text" in framed.output
     bad = CliRunner().invoke(app, ["run", "--headless", "--speed", "fast"])
     assert bad.exit_code != 0

@@ -319,7 +319,7 @@ def serve_with_window(
 ) -> threading.Thread:
     """Serve the persistent protocol and run ``window`` (this thread) with ``runner`` (its own
     thread) while ``program(port)`` runs in a third; tear everything down; return that thread."""
-    link = Link(runner.bus, runner.sim.config.settings, port_rx=0, port_tx=0, stream_port=0)
+    link = Link(runner.bus, runner.sim.config, port_rx=0, port_tx=0, stream_port=0)
     with link:
         thread = threading.Thread(target=program, args=(link.stream.port,))
         thread.start()

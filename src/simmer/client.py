@@ -8,7 +8,9 @@
 
 ``connect(scheme="two-port")`` speaks SimMeR's original scheme (ports 61200/61201) and
 ``connect(serial="/dev/pts/3")`` a serial port: the simulator's virtual one or the robot's
-Bluetooth port. The calls are the same whichever you choose.
+Bluetooth port. Add ``framed=True`` to either for SimMeR v1.2's framed text (``[u0]`` ->
+``[u0:15.45]``; ``True``/``DRIVE STOP`` read as +inf, ``False``/``Not Found`` as NaN, and the
+reply's text is kept in ``last_text``). The calls are the same whichever you choose.
 """
 
 from __future__ import annotations
@@ -21,7 +23,13 @@ from types import TracebackType
 from typing import Literal, Protocol
 
 from simmer.errors import ConnectionFailed, ReplyTimeout
-from simmer.protocol import FRAME_HEADER, read_frame_header, unpack_replies
+from simmer.protocol import (
+    FRAME_HEADER,
+    framed_value,
+    read_frame_header,
+    read_framed_reply,
+    unpack_replies,
+)
 
 STREAM_PORT = 61202
 PORT_RX = 61200
@@ -30,8 +38,15 @@ PORT_TX = 61201
 Scheme = Literal["stream", "two-port", "serial"]
 
 
+FRAME = ("[", "]")
+"""SimMeR v1.2's frame characters (its config's ``frame_start`` and ``frame_end``)."""
+
+
 class Link(Protocol):
     """What a client needs from a connection: one message in, its reply values out."""
+
+    last_text: str | None
+    """The last reply as text, for framed links (None for packed replies)."""
 
     def exchange(self, message: str) -> list[float]:
         """Send one message and return its replies."""
@@ -69,6 +84,7 @@ class StreamLink:
 
     def __init__(self, host: str, port: int, timeout: float) -> None:
         self.address = f"{host}:{port}"
+        self.last_text: str | None = None
         self._sock = _connect_tcp(host, port, timeout)
 
     def exchange(self, message: str) -> list[float]:
@@ -87,18 +103,38 @@ class StreamLink:
         self._sock.close()
 
 
+def _framed_values(text: str, message: str, frame: tuple[str, str]) -> list[float]:
+    try:
+        pairs = read_framed_reply(text, *frame)
+    except ValueError as exc:
+        raise ConnectionFailed(f"reply to {message!r}: {exc}") from None
+    return [framed_value(value) for _, value in pairs]
+
+
 class TwoPortLink:
     """SimMeR's scheme: send on ``port_rx`` and close, then read the reply from ``port_tx``.
 
-    The reply width (4 or 8 bytes) is inferred from the reply's length."""
+    The reply width (4 or 8 bytes) is inferred from the reply's length; with ``frame`` (start
+    and end characters) the message is framed and the reply read as SimMeR v1.2's text."""
 
-    def __init__(self, host: str, port_rx: int, port_tx: int, timeout: float) -> None:
+    def __init__(
+        self,
+        host: str,
+        port_rx: int,
+        port_tx: int,
+        timeout: float,
+        frame: tuple[str, str] | None = None,
+    ) -> None:
         self.host, self.port_rx, self.port_tx, self.timeout = host, port_rx, port_tx, timeout
+        self.frame = frame
+        self.last_text: str | None = None
 
     def exchange(self, message: str) -> list[float]:
         """One message: connect, send, close; connect, read until closed."""
+        frame = self.frame
+        payload = f"{frame[0]}{message}{frame[1]}" if frame else message
         with _connect_tcp(self.host, self.port_rx, self.timeout) as out:
-            out.sendall(message.encode())
+            out.sendall(payload.encode())
         data = bytearray()
         with _connect_tcp(self.host, self.port_tx, self.timeout) as back:
             try:
@@ -106,6 +142,15 @@ class TwoPortLink:
                     data += chunk
             except TimeoutError:
                 raise ReplyTimeout(f"no reply to {message!r} within {self.timeout} s") from None
+        if frame is not None:
+            self.last_text = data.decode("ascii", errors="replace")
+            return _framed_values(self.last_text, message, frame)
+        if not data:
+            raise ConnectionFailed(
+                f"the simulator answered {message!r} with nothing: it may speak SimMeR v1.2's "
+                "framed text (protocol = 'framed'); connect with framed=True "
+                "(simmer console --framed)"
+            )
         count = message.count(",") + 1
         width = len(data) // count if len(data) in (4 * count, 8 * count) else 4
         if not data or len(data) % width:
@@ -117,12 +162,22 @@ class TwoPortLink:
 
 
 class SerialLink:
-    """A serial port (pyserial): a line per message, one packed float per command back."""
+    """A serial port (pyserial): a line per message, one packed float per command back; with
+    ``frame``, a frame per message and a framed text reply read up to its end character."""
 
-    def __init__(self, port: str, baudrate: int, timeout: float, width: int) -> None:
+    def __init__(
+        self,
+        port: str,
+        baudrate: int,
+        timeout: float,
+        width: int,
+        frame: tuple[str, str] | None = None,
+    ) -> None:
         import serial  # pyserial
 
         self.width = width
+        self.frame = frame
+        self.last_text: str | None = None
         try:
             self._port = serial.Serial(port, baudrate=baudrate, timeout=timeout)
         except (serial.SerialException, OSError) as exc:
@@ -130,6 +185,14 @@ class SerialLink:
 
     def exchange(self, message: str) -> list[float]:
         """Write the message and a newline, read one value per command."""
+        if self.frame is not None:
+            start, end = self.frame
+            self._port.write(f"{start}{message}{end}".encode())
+            data = self._port.read_until(end.encode())
+            self.last_text = data.decode("ascii", errors="replace")
+            if not data.endswith(end.encode()):
+                raise ReplyTimeout(f"serial reply to {message!r}: {self.last_text!r} so far")
+            return _framed_values(self.last_text, message, self.frame)
         size = self.width * (message.count(",") + 1)
         self._port.write(message.encode() + b"\n")
         data = self._port.read(size)
@@ -192,21 +255,27 @@ def connect(
     baudrate: int = 9600,
     width: int = 4,
     timeout: float = 30.0,
+    framed: bool = False,
 ) -> Client:
     """Connect with the persistent protocol (default), ``scheme="two-port"``, or ``serial=PATH``.
 
     ``width`` is the serial reply width (4 for the Arduino and SimMeR's default); TCP replies
-    say or reveal their own width. Raises :class:`~simmer.errors.ConnectionFailed`.
+    say or reveal their own width. ``framed=True`` speaks SimMeR v1.2's framed text over the
+    two-port scheme (the default scheme then) or a serial port; the persistent protocol always
+    uses its own frames. Raises :class:`~simmer.errors.ConnectionFailed`.
     """
     if scheme is None:
-        scheme = "serial" if serial is not None else "stream"
+        scheme = "serial" if serial is not None else ("two-port" if framed else "stream")
+    frame = FRAME if framed else None
     link: Link
     if scheme == "serial":
         if serial is None:
             raise ValueError("scheme='serial' needs serial=PATH")
-        link = SerialLink(str(serial), baudrate, timeout, width)
+        link = SerialLink(str(serial), baudrate, timeout, width, frame)
     elif scheme == "two-port":
-        link = TwoPortLink(host, port_rx, port_tx, timeout)
+        link = TwoPortLink(host, port_rx, port_tx, timeout, frame)
     else:
+        if framed:
+            raise ValueError("framed=True is for scheme='two-port' or a serial port")
         link = StreamLink(host, port, timeout)
     return Client(link)

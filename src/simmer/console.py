@@ -1,8 +1,10 @@
 """``simmer console``: type commands, see the replies (the lab's interactive client).
 
 Works over any :mod:`simmer.client` connection: the persistent protocol, SimMeR's two-port
-scheme or a serial port (the simulator's virtual one or the robot's). Line editing and history
-come from the standard library's readline where it is available.
+scheme or a serial port (the simulator's virtual one or the robot's). Replies are shown in the
+form in use: numbers for packed replies; for SimMeR v1.2's framed text (``--framed``) the reply
+as sent (``[u0:15.45,w0:True]``), like the stock v1.2 client, with a warning when an entry's id
+is not the command's. Line editing and history come from readline where it is available.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from pathlib import Path
 
 from simmer.client import Client
 from simmer.errors import ClientError
+from simmer.protocol import command_ids, read_framed_reply
 
 HISTORY = Path.home() / ".simmer_history"
 HELP = (
@@ -30,6 +33,25 @@ def format_reply(value: float) -> str:
     if math.isinf(value):
         return "+inf (accepted)" if value > 0 else "-inf"
     return f"{value:.3f}"
+
+
+def format_exchange(message: str, replies: list[float]) -> str:
+    """Each command of ``message`` beside its packed reply value."""
+    commands = message.split(",")
+    return "  ".join(
+        f"{c.strip()}: {format_reply(v)}" for c, v in zip(commands, replies, strict=False)
+    )
+
+
+def format_framed(message: str, text: str) -> str:
+    """A framed reply as sent, then a line per entry whose id is not its command's."""
+    lines = [text]
+    ids = command_ids(message)
+    for index, (device_id, _) in enumerate(read_framed_reply(text)):
+        wanted = ids[index] if index < len(ids) else None
+        if device_id != wanted:
+            lines.append(f"  entry {index + 1} is for {device_id!r}; the command was {wanted!r}")
+    return "\n".join(lines)
 
 
 def _enable_history() -> Callable[[], None]:
@@ -74,12 +96,7 @@ def run_console(
             except ClientError as exc:
                 echo(f"error: {exc}")
                 continue
-            commands = line.split(",")
-            echo(
-                "  ".join(
-                    f"{c.strip()}: {format_reply(v)}"
-                    for c, v in zip(commands, replies, strict=False)
-                )
-            )
+            text = client.link.last_text
+            echo(format_exchange(line, replies) if text is None else format_framed(line, text))
     finally:
         save()

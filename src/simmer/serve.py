@@ -52,7 +52,7 @@ def serve(
     runner = Runner(sim, speed=speed)
     link = Link(
         runner.bus,
-        sim.config.settings,
+        sim.config,
         host=host,
         port_rx=port_rx,
         port_tx=port_tx,

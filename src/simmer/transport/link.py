@@ -6,7 +6,9 @@ import ipaddress
 import logging
 from pathlib import Path
 
-from simmer.config.models import Settings
+from simmer.config.loader import describe_replies
+from simmer.config.models import SimConfig
+from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import STREAM_PORT, StreamServer, TwoPortServer
@@ -24,13 +26,27 @@ def is_loopback(host: str) -> bool:
         return False
 
 
+def reply_codec(config: SimConfig) -> ReplyCodec:
+    """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""
+    settings = config.settings
+    if settings.protocol == "packed":
+        return PackedCodec(settings.reply_bytes, settings.str_encoding)
+    return FramedCodec(
+        {spec.id: spec.group[:-1] for spec in config.devices},
+        settings.frame_start,
+        settings.frame_end,
+        settings.round_digits,
+        settings.str_encoding,
+    )
+
+
 class Link:
     """The two-port server, the stream server and (optionally) the virtual serial port."""
 
     def __init__(
         self,
         bus: CommandBus,
-        settings: Settings,
+        config: SimConfig,
         *,
         host: str | None = None,
         port_rx: int | None = None,
@@ -39,27 +55,32 @@ class Link:
         serial: bool = False,
         serial_link: str | Path | None = None,
     ) -> None:
+        settings = config.settings
         self.host = host if host is not None else settings.host
+        self.protocol = describe_replies(settings)
         if not is_loopback(self.host):
             log.warning(
                 "listening on %s: any machine that can reach it can drive the robot", self.host
             )
-        width, encoding, timeout = settings.reply_bytes, settings.str_encoding, settings.timeout
+        codec = reply_codec(config)
         self.two_port = TwoPortServer(
             bus,
             self.host,
             settings.port_rx if port_rx is None else port_rx,
             settings.port_tx if port_tx is None else port_tx,
-            width=width,
-            encoding=encoding,
+            codec=codec,
         )
         self.serial: SerialServer | None = None
         try:
-            self.stream = StreamServer(bus, self.host, stream_port, width=width, encoding=encoding)
+            self.stream = StreamServer(
+                bus,
+                self.host,
+                stream_port,
+                width=settings.reply_bytes,
+                encoding=settings.str_encoding,
+            )
             if serial or serial_link is not None:
-                self.serial = SerialServer(
-                    bus, serial_link, width=width, encoding=encoding, timeout=timeout
-                )
+                self.serial = SerialServer(bus, serial_link, codec=codec, timeout=settings.timeout)
         except OSError:
             self.close()
             raise
@@ -75,12 +96,12 @@ class Link:
         """One line per transport: where a control program connects."""
         lines = [
             f"SimMeR two-port TCP: {self.host} rx {self.two_port.port_rx}, "
-            f"tx {self.two_port.port_tx}",
-            f"persistent TCP:      {self.host} port {self.stream.port}",
+            f"tx {self.two_port.port_tx}; replies {self.protocol}",
+            f"persistent TCP:      {self.host} port {self.stream.port} (simmer.client)",
         ]
         if self.serial is not None:
             link = f" (link {self.serial.link})" if self.serial.link else ""
-            lines.append(f"virtual serial port: {self.serial.path}{link}")
+            lines.append(f"virtual serial port: {self.serial.path}{link}; replies {self.protocol}")
         return lines
 
     def close(self) -> None:

@@ -1,8 +1,11 @@
 """A virtual serial port: a pseudo-terminal that speaks what the Arduino robot speaks.
 
 A program opens the printed path (or the stable link) with pyserial as if it were the robot's
-Bluetooth port. A command ends at ``\\n`` or after 50 ms of silence, like the Arduino sketch;
-each reply is the packed floats, one per command, with no framing.
+Bluetooth port. With packed replies (SimMeR v1.0/v1.1, the Arduino examples) a command ends at
+``\\n`` or after 50 ms of silence, like the Arduino sketch, and each reply is the packed floats,
+one per command, with no framing. With SimMeR v1.2's framed text a message ends at the frame's
+closing character, as the v1.2 Arduino example reads it; text outside frames is ignored and the
+reply is one frame (``[u0:15.45]``) with no line ending, so a program reads until ``]``.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import time
 import tty
 from pathlib import Path
 
-from simmer.protocol import MAX_MESSAGE_BYTES, decode_message, pack_replies
+from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import BusClosed, CommandBus
 
 log = logging.getLogger("simmer.transport")
@@ -35,13 +38,15 @@ class SerialServer:
         bus: CommandBus,
         link: str | Path | None = None,
         *,
-        width: int = 4,
-        encoding: str = "utf-8",
+        codec: ReplyCodec | None = None,
         timeout: float = 300.0,
     ) -> None:
         self.bus = bus
-        self.width = width
-        self.encoding = encoding
+        self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
+        codec = self.codec
+        self._frame: tuple[bytes, bytes] | None = None
+        if isinstance(codec, FramedCodec):
+            self._frame = (codec.start.encode(), codec.end.encode())
         self.timeout = timeout
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)  # no echo, no newline translation: replies are binary
@@ -68,9 +73,11 @@ class SerialServer:
     def _loop(self) -> None:
         buffer = bytearray()
         last = time.monotonic()
+        silence = self._frame is None  # framed messages end at the frame's end, never by time
         try:
             while True:
-                wait = None if not buffer else max(0.0, last + SILENCE - time.monotonic())
+                waiting = buffer and silence
+                wait = max(0.0, last + SILENCE - time.monotonic()) if waiting else None
                 readable, _, _ = select.select([self._master, self._wake_r], [], [], wait)
                 if self._wake_r in readable:
                     return
@@ -80,10 +87,7 @@ class SerialServer:
                     continue
                 buffer += os.read(self._master, 65536)
                 last = time.monotonic()
-                while (end := buffer.find(b"\n")) >= 0:
-                    line = bytes(buffer[:end])
-                    del buffer[: end + 1]
-                    self._answer(line)
+                self._split(buffer)
                 if len(buffer) > MAX_MESSAGE_BYTES:
                     self._answer(bytes(buffer))
                     buffer.clear()
@@ -91,10 +95,29 @@ class SerialServer:
             if not self._stopping.is_set():
                 log.error("serial port %s stopped: %s", self.path, exc)
 
+    def _split(self, buffer: bytearray) -> None:
+        """Answer every complete message at the front of ``buffer`` and remove it."""
+        if self._frame is None:
+            while (end := buffer.find(b"\n")) >= 0:
+                line = bytes(buffer[:end])
+                del buffer[: end + 1]
+                self._answer(line)
+            return
+        start, stop = self._frame
+        while (end := buffer.find(stop)) >= 0:
+            message = bytes(buffer[: end + len(stop)])
+            del buffer[: end + len(stop)]
+            self._answer(message)
+        if start not in buffer:
+            buffer.clear()  # text outside frames (line endings, say) is ignored
+
     def _answer(self, data: bytes) -> None:
-        decoded = decode_message(data, self.encoding)
+        decoded = self.codec.decode(data)
+        if decoded.text is None and decoded.count == 0:
+            log.warning("%s: %s", self.client, decoded.error)
+            return
         replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
-        reply = memoryview(pack_replies(replies, self.width))
+        reply = memoryview(self.codec.encode(decoded, replies))
         while reply:
             reply = reply[os.write(self._master, reply) :]
 

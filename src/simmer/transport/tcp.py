@@ -19,9 +19,10 @@ from concurrent.futures import Future
 from simmer.protocol import (
     MAX_MESSAGE_BYTES,
     Decoded,
+    PackedCodec,
+    ReplyCodec,
     decode_message,
     frame_replies,
-    pack_replies,
 )
 from simmer.transport.bus import BusClosed, CommandBus
 
@@ -185,11 +186,25 @@ class _Server:
         self.close()
 
 
+class _Pending:
+    """A two-port message waiting for its reply connection: what was asked, and its replies."""
+
+    __slots__ = ("decoded", "future")
+
+    def __init__(self, decoded: Decoded, future: Future[list[float]]) -> None:
+        self.decoded = decoded
+        self.future = future
+
+
 class TwoPortServer(_Server):
     """SimMeR's scheme: a message arrives on ``port_rx`` (everything until the client closes);
     its reply leaves on the next connection to ``port_tx`` once it is ready, then that
     connection is closed. Replies go out in the order messages arrived; a reply connection that
-    hangs up before its reply is sent does not consume it, so no reply is lost or doubled."""
+    hangs up before its reply is sent does not consume it, so no reply is lost or doubled.
+
+    ``codec`` decides the bytes both ways: packed floats (SimMeR v1.0/v1.1) or SimMeR v1.2's
+    framed text, whose message with no complete frame gets its reply connection closed with
+    nothing sent, as the original did."""
 
     kind = "two-port"
 
@@ -200,14 +215,12 @@ class TwoPortServer(_Server):
         port_rx: int = 61200,
         port_tx: int = 61201,
         *,
-        width: int = 4,
-        encoding: str = "utf-8",
+        codec: ReplyCodec | None = None,
     ) -> None:
         super().__init__(bus, host, [port_rx, port_tx])
         self.port_rx, self.port_tx = self.ports
-        self.width = width
-        self.encoding = encoding
-        self.unclaimed: deque[Future[list[float]]] = deque()  # replies nobody has asked for yet
+        self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
+        self.unclaimed: deque[_Pending] = deque()  # replies nobody has asked for yet
         self.waiting: deque[_ReplyConnection] = deque()  # reply connections with no reply yet
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
@@ -239,8 +252,9 @@ class _MessageConnection(_Connection):
         if not self.data:
             log.debug("%s connected and sent nothing: no message", self.client)
             return
-        decoded = decode_message(bytes(self.data), self.two_port.encoding)
-        self.two_port.unclaimed.append(self.server.bus.submit(decoded, self.client))
+        decoded = self.two_port.codec.decode(bytes(self.data))
+        future = self.server.bus.submit(decoded, self.client)
+        self.two_port.unclaimed.append(_Pending(decoded, future))
         self.two_port.match()
 
 
@@ -250,27 +264,27 @@ class _ReplyConnection(_Connection):
     def __init__(self, server: TwoPortServer, conn: socket.socket, client: str) -> None:
         super().__init__(server, conn, client)
         self.two_port = server
-        self.reply: Future[list[float]] | None = None
+        self.reply: _Pending | None = None
 
     def opened(self) -> None:
         """Queue up for the next reply."""
         self.two_port.waiting.append(self)
         self.two_port.match()
 
-    def claim(self, reply: Future[list[float]]) -> None:
+    def claim(self, reply: _Pending) -> None:
         """This connection will carry ``reply`` once it is ready."""
         self.reply = reply
-        reply.add_done_callback(self.ready)
+        reply.future.add_done_callback(lambda _future: self.ready(reply))
 
-    def ready(self, reply: Future[list[float]]) -> None:
+    def ready(self, reply: _Pending) -> None:
         """The reply exists (loop thread): send it and close."""
         if reply is not self.reply or self.closed:
             return
-        if reply.exception() is not None:
+        if reply.future.exception() is not None:
             self.close()
             return
         self.close_when_sent = True
-        self.send(pack_replies(reply.result(), self.two_port.width))
+        self.send(self.two_port.codec.encode(reply.decoded, reply.future.result()))
 
     def received(self, chunk: bytes) -> None:
         """Stray bytes are ignored; end of stream means the client left."""

@@ -1,0 +1,277 @@
+"""SimMeR v1.2's framed text protocol, v1.0 reply widths and the originals' lenient parsing,
+over real loopback sockets and a real pseudo-terminal (BEHAVIOUR §6.1 and §6.2).
+
+The expected replies are written out as the original v1.2 sends them for the default maze and
+lab rover (noise off): u0 reads 39.5 in, u1 3.5 in, u2 53.588425... in (53.588 at 3 decimals).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import socket
+import struct
+import time
+from pathlib import Path
+
+import pytest
+import serial
+
+from link_support import serving, two_port_send
+from simmer import Simulation
+from simmer.client import connect
+from simmer.config import load_config
+from simmer.console import run_console
+from simmer.protocol import FramedCodec, framed_value, parse_command, unwrap_frames
+from simmer.transport import Link
+
+from helpers import SIMMER_PY, default_data, make_config
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def framed_sim(**settings: object) -> Simulation:
+    """The default maze and rover, speaking SimMeR v1.2's framed text (native settings)."""
+    data = default_data() | {"protocol": "framed", "str_encoding": "ascii"} | settings
+    return Simulation(make_config(data))
+
+
+def two_port_raw(link: Link, message: bytes) -> bytes:
+    """What a stock client does: send on port_rx and close, then read port_tx to the end."""
+    with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
+        out.sendall(message)
+    data = b""
+    with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
+        while chunk := back.recv(1024):
+            data += chunk
+    return data
+
+
+# ----------------------------------------------------------------------------- pure
+
+
+@pytest.mark.parametrize(
+    ("text", "commands"),
+    [
+        ("[u0]", "u0"),
+        ("[u0][u1]", "u0,u1"),
+        ("hello [u0,w0:6] bye", "u0,w0:6"),
+        ("[u0]junk[u1]\n", "u0,u1"),
+        ("u0", None),
+        ("[u0", None),
+        ("u0]", None),
+    ],
+)
+def test_frames_are_unwrapped_and_text_outside_them_ignored(
+    text: str, commands: str | None
+) -> None:
+    assert unwrap_frames(text) == commands
+
+
+def test_framed_entries_as_the_original_writes_them() -> None:
+    codec = FramedCodec({"u0": "sensor", "w0": "drive", "m0": "motor"}, round_digits=3)
+    decoded = codec.decode(b"[u0,w0:6,w0:1,xx,zz,m0]")
+    values = [15.4512, math.inf, math.nan, math.inf, math.nan, 0.0]
+    assert codec.encode(decoded, values) == (
+        b"[u0:15.451,w0:True,w0:False,xx:DRIVE STOP,zz:Not Found,m0:0.0]"
+    )
+    assert codec.decode(b"u0").count == 0  # no frame: nothing is sent back
+
+
+def test_framed_values_read_back_as_the_packed_protocol_numbers() -> None:
+    assert framed_value("True") == math.inf
+    assert framed_value("DRIVE STOP") == math.inf
+    assert math.isnan(framed_value("False"))
+    assert math.isnan(framed_value("Not Found"))
+    assert framed_value("15.45") == 15.45
+
+
+@pytest.mark.parametrize(
+    ("text", "device", "value", "rules"),
+    [
+        ("r0-0-45", "r0", 0.0, ("zero",)),  # the typo 'r0-0' + str(angle): a zero turn
+        ("w0:3", "w0", 3.0, ()),
+        ("w0 3", "w0", 3.0, ("skip",)),
+        ("w0_3", "w0", 3.0, ("skip",)),
+        ("w03", "w0", 0.0, ("skip", "zero")),  # a zero drive
+        ("w0-abc", "w0", 0.0, ("zero",)),
+        ("u0", "u0", 0.0, ()),
+    ],
+)
+def test_lenient_parsing_is_the_originals(
+    text: str, device: str, value: float, rules: tuple[str, ...]
+) -> None:
+    command = parse_command(text, lenient=True)
+    assert (command.device, command.value, command.lenient, command.error) == (
+        device,
+        value,
+        rules,
+        None,
+    )
+
+
+@pytest.mark.parametrize("text", ["w0-nan", "w0-inf", "w0-1e300"])
+def test_lenient_parsing_still_refuses_values_no_drive_means(text: str) -> None:
+    assert parse_command(text, lenient=True).error
+
+
+def test_strict_parsing_accepts_the_v12_separator_only() -> None:
+    assert parse_command("w0:3").value == 3.0
+    assert parse_command("w0 3").error
+    assert parse_command("r0-0-45").error
+
+
+# ----------------------------------------------------------------------------- two-port TCP
+
+
+def test_v12_client_over_two_port_gets_exactly_the_originals_replies() -> None:
+    with serving(framed_sim()) as (_, link):
+        assert two_port_raw(link, b"[u0]") == b"[u0:39.5]"
+        assert two_port_raw(link, b"[u0][u1]") == b"[u0:39.5,u1:3.5]"
+        assert two_port_raw(link, b"[u2]") == b"[u2:53.588]"
+        assert two_port_raw(link, b"hello [u1] bye") == b"[u1:3.5]"
+        assert two_port_raw(link, b"[zz]") == b"[zz:Not Found]"
+        assert two_port_raw(link, b"u0") == b""  # no frame: closed with nothing sent
+        assert two_port_raw(link, b"[w0:6]") == b"[w0:True]"
+        assert two_port_raw(link, b"[w0:6]") == b"[w0:False]"  # still moving
+        assert two_port_raw(link, b"[xx]") == b"[xx:DRIVE STOP]"
+        assert two_port_raw(link, b"[r0:-90]") == b"[r0:True]"
+        assert two_port_raw(link, b"[xx]") == b"[xx:DRIVE STOP]"
+        assert two_port_raw(link, b"[u0,w0:0,zz]") == b"[u0:39.5,w0:True,zz:Not Found]"
+
+
+def test_rounding_follows_round_digits() -> None:
+    with serving(framed_sim(round_digits=1)) as (_, link):
+        assert two_port_raw(link, b"[u2]") == b"[u2:53.6]"
+
+
+def test_a_v12_config_py_selects_the_framed_protocol_by_itself() -> None:
+    config = load_config(SIMMER_PY / "default_config.py")
+    assert config.settings.protocol == "framed"
+    assert config.settings.lenient_commands
+    assert "v1.2" in config.origin
+    with serving(Simulation(config)) as (_, link):
+        reply = two_port_raw(link, b"[u0,w0:0,xx]").decode("ascii")
+        entries = reply[1:-1].split(",")
+        assert reply.startswith("[")
+        assert reply.endswith("]")
+        assert entries[1:] == ["w0:True", "xx:DRIVE STOP"]
+        assert entries[0].startswith("u0:")
+        assert float(entries[0][3:]) > 0
+
+
+def test_the_client_library_speaks_framed_two_port() -> None:
+    with (
+        serving(framed_sim()) as (_, link),
+        connect(port_rx=link.two_port.port_rx, port_tx=link.two_port.port_tx, framed=True) as robot,
+    ):
+        assert robot.send("u0,u1") == [39.5, 3.5]
+        assert robot.link.last_text == "[u0:39.5,u1:3.5]"
+        assert robot.drive("w0", 0) == math.inf
+
+
+def test_the_console_shows_the_framed_reply_as_sent() -> None:
+    lines = iter(["u0,zz", "quit"])
+    shown: list[str] = []
+    with (
+        serving(framed_sim()) as (_, link),
+        connect(port_rx=link.two_port.port_rx, port_tx=link.two_port.port_tx, framed=True) as robot,
+    ):
+        run_console(robot, read=lambda _prompt: next(lines), echo=shown.append, history=False)
+    assert "[u0:39.5,zz:Not Found]" in shown
+
+
+def test_a_packed_client_hears_why_a_framed_simulator_said_nothing() -> None:
+    from simmer.errors import ConnectionFailed
+
+    with (
+        serving(framed_sim()) as (_, link),
+        connect(
+            scheme="two-port", port_rx=link.two_port.port_rx, port_tx=link.two_port.port_tx
+        ) as robot,
+        pytest.raises(ConnectionFailed, match="framed"),
+    ):
+        robot.send("u0")
+
+
+def test_the_persistent_protocol_keeps_its_packed_frames_in_framed_mode() -> None:
+    with serving(framed_sim()) as (_, link), connect(port=link.stream.port) as robot:
+        assert robot.send("u0,zz")[0] == 39.5
+
+
+# ----------------------------------------------------------------------------- serial port
+
+
+def test_v12_program_over_the_serial_port_reads_frames_until_the_end_character() -> None:
+    with serving(framed_sim(), serial=True) as (_, link):
+        assert link.serial is not None
+        with serial.Serial(link.serial.path, 9600, timeout=5) as port:
+            port.write(b"[u0]")
+            assert port.read_until(b"]") == b"[u0:39.5]"
+            port.write(b"[u0,u1]\n")  # the line ending is text outside a frame: ignored
+            assert port.read_until(b"]") == b"[u0:39.5,u1:3.5]"
+            port.write(b"noise\n[zz][xx]")  # the robot reads until ']': two messages
+            assert port.read_until(b"]") == b"[zz:Not Found]"
+            assert port.read_until(b"]") == b"[xx:DRIVE STOP]"
+            port.write(b"[w0:")  # a frame split across two writes, 60 ms apart
+            port.flush()
+            time.sleep(0.06)
+            port.write(b"6]")
+            assert port.read_until(b"]") == b"[w0:True]"
+            port.timeout = 0.3
+            assert port.read(1) == b""  # exactly one reply each
+
+
+def test_the_client_library_speaks_framed_serial() -> None:
+    with serving(framed_sim(), serial=True) as (_, link):
+        assert link.serial is not None
+        with connect(serial=link.serial.path, framed=True, timeout=5) as robot:
+            assert robot.send("u1,zz")[0] == 3.5
+            assert robot.link.last_text == "[u1:3.5,zz:Not Found]"
+
+
+# ----------------------------------------------------------------------------- v1.0 and §6.2
+
+
+def test_a_v10_config_with_a_v10_client_needs_no_edit() -> None:
+    config = load_config(SIMMER_PY / "lab_rover_quiet.py")
+    assert config.settings.reply_bytes == 8
+    assert config.origin.startswith("looks like a SimMeR v1.0 config")
+    assert "8-byte doubles" in config.origin
+    with serving(Simulation(config)) as (_, link):
+        with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
+            out.sendall(b"u0,u1")
+        with socket.create_connection(("127.0.0.1", link.two_port.port_tx)) as back:
+            data = back.recv(1024)
+        assert len(data) == 16
+        assert struct.unpack("<2d", data)[1] == pytest.approx(3.5, abs=0.5)
+
+
+def test_a_config_py_can_still_choose_its_reply_width(tmp_path: Path) -> None:
+    text = (SIMMER_PY / "lab_rover_quiet.py").read_text() + "\nreply_bytes = 4\n"
+    (tmp_path / "config.py").write_text(text)
+    config = load_config(tmp_path / "config.py")
+    assert config.settings.reply_bytes == 4
+    assert "but it sets reply_bytes" in config.origin
+
+
+def test_original_parsing_over_a_transport_warns_once_per_device(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    config = load_config(SIMMER_PY / "lab_rover_quiet.py")
+    with caplog.at_level(logging.WARNING), serving(Simulation(config), speed=None) as (_, link):
+        assert two_port_send(link, b"r0-0-45", width=8) == [math.inf]  # a zero turn
+        assert two_port_send(link, b"r0-0-90", width=8) == [math.inf]
+        assert two_port_send(link, b"w03", width=8) == [math.inf]  # a zero drive
+        assert two_port_send(link, b"w0:3", width=8) == [math.inf]
+    zero = [r for r in caplog.records if "read as 0" in r.getMessage()]
+    assert [r.getMessage().split("'")[1] for r in zero] == ["r0-0-45", "w03"]
+    skip = [r for r in caplog.records if "third character" in r.getMessage()]
+    assert [r.getMessage().split("'")[1] for r in skip] == ["w03"]
+
+
+def test_native_files_keep_strict_parsing() -> None:
+    sim = Simulation(make_config(default_data()))
+    assert math.isnan(sim.command("r0-0-45")[0])
+    assert math.isnan(sim.command("w03")[0])
+    assert sim.command("w0:3") == [math.inf]
