@@ -14,7 +14,7 @@ from simmer.config.convert import convert_simmer_py
 
 from helpers import SIMMER_PY_FILES
 
-DEFAULT, QUIET, NOISY, WITH_DEVICE = ALL = SIMMER_PY_FILES
+DEFAULT, QUIET, NOISY, WITH_DEVICE, TOF_DEVICE = ALL = SIMMER_PY_FILES
 
 
 def line_with(text: str, start: str) -> str:
@@ -46,8 +46,22 @@ def test_comments_next_to_settings_are_carried_over() -> None:
     assert "] # Matrix defining the maze walls" in text  # after the multi-line walls array
     assert line_with(text, "velocity = [-6, 0]").endswith("# sideways")
     assert line_with(text, "height = 4").endswith("# above the block: cannot see it")
-    assert "frame_start" not in text
+    assert 'frame_start = "["' in text  # SimMeR v1.2's frames are a setting now
     assert "maze_dim_x" not in text
+
+
+@pytest.mark.parametrize(
+    ("path", "version", "chosen"),
+    [
+        (DEFAULT, "v1.2", ['protocol = "framed"']),
+        (QUIET, "v1.0", ['protocol = "packed"', "reply_bytes = 8"]),
+    ],
+)
+def test_the_detected_version_is_written_out(path: Path, version: str, chosen: list[str]) -> None:
+    text = convert_simmer_py(path)
+    lines = text.splitlines()
+    said = next(i for i, line in enumerate(lines) if f"looks like a SimMeR {version}" in line)
+    assert lines[said + 2 : said + 3 + len(chosen)] == [*chosen, "lenient_commands = true"]
 
 
 def test_device_entry_comment_goes_on_its_table_header() -> None:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import logging
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
 
-from simmer.config import load_config, summarize
+from simmer.config import SimConfig, load_config, summarize
 from simmer.errors import ConfigError
 
 app = typer.Typer(
@@ -19,8 +20,16 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-out = Console(highlight=False)
+out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+class Protocol(StrEnum):
+    """Choices of ``--protocol`` (the ``protocol`` setting)."""
+
+    packed = "packed"
+    framed = "framed"
+
 
 ConfigArg = Annotated[
     Path | None,
@@ -39,16 +48,34 @@ def _report_config_error(exc: ConfigError) -> None:
         err.print(f"  {issue.render(exc.source)}", markup=False)
 
 
+def _report_config_warnings(config: SimConfig) -> None:
+    """Print what an original config.py does that a native file may not (it still runs)."""
+    count = len(config.warnings)
+    if count:
+        err.print(f"[bold yellow]{count} warning{'s' if count != 1 else ''} in {config.source}:[/]")
+    for issue in config.warnings:
+        err.print(f"  {issue.render(config.source)}", markup=False, style="yellow")
+
+
 @app.command()
 def check(
     config: Annotated[Path, typer.Argument(help="Configuration file to check.")],
 ) -> None:
-    """Check a configuration: print OK and a summary, or every problem found (exit status 1)."""
+    """Check a configuration and call each device once: print OK and a summary, or every
+    problem found (exit status 1)."""
     try:
         loaded = load_config(config)
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
+    _report_config_warnings(loaded)
+    if loaded.origin:
+        out.print(loaded.origin, markup=False)
+    from simmer.config.probe import probe_devices
+
+    if issues := probe_devices(loaded):
+        _report_config_error(ConfigError(config, issues))
+        raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
 
@@ -99,6 +126,22 @@ def run(
     serial_link: Annotated[
         Path | None, typer.Option(help="Make a stable link to the serial port at this path.")
     ] = None,
+    protocol: Annotated[
+        Protocol | None,
+        typer.Option(
+            help="What the two-port scheme and the serial port speak (default: the "
+            "configuration's; a SimMeR v1.2 config.py says framed)."
+        ),
+    ] = None,
+    reply_bytes: Annotated[
+        int | None,
+        typer.Option(
+            help="Packed reply width: 4 (SimMeR v1.1, Arduino) or 8 (v1.0) (default: the "
+            "configuration's; a v1.0 config.py says 8).",
+            min=4,
+            max=8,
+        ),
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover)."""
     from simmer.serve import parse_speed
@@ -108,11 +151,25 @@ def run(
         pace = parse_speed(speed)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    if reply_bytes not in (None, 4, 8):
+        raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
+    overrides = {"protocol": protocol and protocol.value, "reply_bytes": reply_bytes}
     try:
-        sim = Simulation(load_config(config), seed=seed)
+        loaded = load_config(config)
+        loaded = loaded.with_settings(**{k: v for k, v in overrides.items() if v is not None})
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
+    try:
+        sim = Simulation(loaded, seed=seed)
+    except Exception:  # a device's own constructor: say which, as `check` does
+        from simmer.config.probe import probe_devices
+
+        _report_config_error(ConfigError(loaded.source, probe_devices(loaded)))
+        raise typer.Exit(1) from None
+    _report_config_warnings(loaded)
+    if loaded.origin:
+        out.print(loaded.origin, markup=False)
     out.print(summarize(sim.config), markup=False)
     out.print(f"noise seed {sim.seed}", markup=False)
     from simmer.errors import SimmerError
@@ -174,6 +231,13 @@ def console(
         str | None, typer.Option(help="Talk to a serial port (virtual or the robot's) instead.")
     ] = None,
     baud: Annotated[int, typer.Option(help="Serial baud rate.")] = 9600,
+    framed: Annotated[
+        bool,
+        typer.Option(
+            help="Speak SimMeR v1.2's framed text ([u0] -> [u0:15.45]) over the two-port "
+            "scheme or --serial, as a simulator with protocol = 'framed' (a v1.2 config.py) does."
+        ),
+    ] = False,
 ) -> None:
     """Interactive console: type commands (u0, w0-6, ...) and see the replies."""
     from simmer.client import connect
@@ -182,7 +246,12 @@ def console(
 
     try:
         client = connect(
-            host, port, scheme="two-port" if two_port else None, serial=serial, baudrate=baud
+            host,
+            port,
+            scheme="two-port" if two_port else None,
+            serial=serial,
+            baudrate=baud,
+            framed=framed,
         )
     except ClientError as exc:
         err.print(f"[bold red]{exc}[/]")

@@ -43,8 +43,17 @@ def _document(source: SimmerPy, out_dir: Path) -> tomlkit.TOMLDocument:
     doc.add(tomlkit.comment("Key names are SimMeR's; each device is a table named by its id."))
     doc.add(tomlkit.nl())
     settings = [k for k in source.data if k not in DEVICE_GROUPS]
-    settings.sort(key=lambda k: source.spans.get(k, (0, 0))[0])
-    for key in settings:
+    chosen = [k for k in settings if k not in source.spans]  # what the version detection chose
+    if chosen:
+        looks = source.origin.partition(": ")[0]
+        doc.add(tomlkit.comment(f"{source.path.name} {looks};"))
+        doc.add(tomlkit.comment("so these keep its replies and its reading of commands:"))
+        for key in chosen:
+            doc.add(key, _item(source, key, source.data[key]))
+        doc.add(tomlkit.nl())
+    in_file = [k for k in settings if k in source.spans]
+    in_file.sort(key=lambda k: source.spans[k][0])
+    for key in in_file:
         doc.add(key, _item(source, key, source.data[key]))
     for group in DEVICE_GROUPS:
         devices = source.data.get(group, {})

@@ -2,6 +2,12 @@
 
 Every problem is collected (not just the first) and reported as ``file: key.path: message``,
 with a "did you mean" for near misses, so a student can fix a file in one pass.
+
+An original SimMeR ``config.py`` is checked less strictly (``original=True``): what the original
+ran although the native format refuses it (BEHAVIOUR §6.3: a hidden block, ``beamwidth = 0``, an
+omni-wheel or arc drive, a motor among the sensors) becomes a warning in
+:attr:`SimConfig.warnings`, written like an error. What would crash or mean nothing (a robot
+starting in a wall, a drive that never moves) stays an error.
 """
 
 from __future__ import annotations
@@ -12,10 +18,11 @@ import importlib.util
 import sys
 import tomllib
 import traceback
+from dataclasses import dataclass, field
 from functools import cache
 from importlib.resources import files
 from pathlib import Path
-from typing import Any, get_args
+from typing import TYPE_CHECKING, Any, get_args
 
 import numpy as np
 from pydantic import BaseModel, ValidationError
@@ -23,11 +30,23 @@ from pydantic import BaseModel, ValidationError
 from simmer.config.models import DEVICE_GROUPS, DeviceSpec, Group, Settings, SimConfig
 from simmer.devices import device_kinds, get_device_kind
 from simmer.errors import ConfigError, ConfigIssue, DeviceKindError
-from simmer.geometry import Pose, place_polygon, polygon_hits_grid, polygons_overlap
+from simmer.geometry import (
+    FloatArray,
+    Pose,
+    place_polygon,
+    polygon_hits_grid,
+    polygons_overlap,
+)
+
+if TYPE_CHECKING:
+    from simmer.world.maze import Maze
 
 DEFAULT_KIND = {"motors": "motor", "drives": "drive"}
 CATEGORY_OF_GROUP = {"motors": "motor", "drives": "drive", "sensors": "sensor"}
+GROUP_OF_CATEGORY: dict[str, Group] = {"motor": "motors", "drive": "drives", "sensor": "sensors"}
 BUILTIN_SOURCE = "<built-in default>"
+ORIGINAL_RUNS = "; the original SimMeR ran this, so SimMeR 2 does too (a TOML file may not)"
+"""Ends a warning about what an original config.py may do but a native file may not."""
 
 
 def load_config(path: str | Path | None = None) -> SimConfig:
@@ -77,10 +96,17 @@ def _toml_error_line(message: str) -> int | None:
     return None
 
 
-def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimConfig:
-    """Validate configuration data; raise :class:`ConfigError` listing every issue found."""
+def config_from_dict(
+    data: dict[str, Any], source: str, base_dir: Path, *, original: bool = False
+) -> SimConfig:
+    """Validate configuration data; raise :class:`ConfigError` listing every issue found.
+
+    ``original``: the data comes from an original SimMeR ``config.py``, so what the original
+    ran is allowed, with a warning (see the module docstring).
+    """
     data = dict(data)
-    issues: list[ConfigIssue] = []
+    found = _Found(original)
+    issues = found.errors
     groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
     issues += _load_plugins(data.get("plugins", []), base_dir)
 
@@ -90,21 +116,38 @@ def config_from_dict(data: dict[str, Any], source: str, base_dir: Path) -> SimCo
     except ValidationError as exc:
         issues += _issues_from_validation(exc, "", Settings)
 
-    devices = _validate_devices(groups, issues, base_dir)
     declared = {
         group: [str(device_id) for device_id in table] if isinstance(table, dict) else []
         for group, table in groups.items()
     }
+    devices = _validate_devices(groups, declared, found, base_dir)
     issues += _check_drive_motors(devices, declared["motors"])
     if settings is not None:
         issues += _check_walls(settings)
         issues += _check_references(settings, declared)
         if not any(issue.key.startswith(("walls", "robot_", "block_")) for issue in issues):
-            issues += _check_placement(settings)
+            _check_placement(settings, found)
     if issues:
         raise ConfigError(source, issues)
     assert settings is not None
-    return SimConfig(settings, tuple(devices), source)
+    return SimConfig(settings, tuple(devices), source, tuple(found.warnings))
+
+
+@dataclass
+class _Found:
+    """The issues found so far: errors, and warnings for an original ``config.py``."""
+
+    original: bool
+    errors: list[ConfigIssue] = field(default_factory=list)
+    warnings: list[ConfigIssue] = field(default_factory=list)
+
+    def strict(self, key: str, message: str, warning: str | None = None) -> None:
+        """Something only the native format refuses: an error, or for an original config.py a
+        warning (saying ``warning``, if given, instead of ``message``)."""
+        if self.original:
+            self.warnings.append(ConfigIssue(key, (warning or message) + ORIGINAL_RUNS))
+        else:
+            self.errors.append(ConfigIssue(key, message))
 
 
 # ----------------------------------------------------------------------------- plugins
@@ -171,8 +214,11 @@ def _describe_plugin_error(entry: str, exc: Exception) -> str:
 
 
 def _validate_devices(
-    groups: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
+    groups: dict[str, Any], declared: dict[str, list[str]], found: _Found, base_dir: Path
 ) -> list[DeviceSpec]:
+    """Validate every device; ``declared`` (ids by table) follows any device an original
+    config.py listed in the wrong table."""
+    issues = found.errors
     devices: list[DeviceSpec] = []
     seen: dict[str, str] = {}
     for group in DEVICE_GROUPS:
@@ -187,6 +233,9 @@ def _validate_devices(
             if not isinstance(raw, dict):
                 issues.append(ConfigIssue(key, f"must be a table of settings, not {raw!r}"))
                 continue
+            home = _rehome(group, device_id, raw, declared, found) if found.original else group
+            if home is None:
+                continue
             id_problem = _id_problem(device_id)
             if id_problem:
                 issues.append(ConfigIssue(key, id_problem))
@@ -199,10 +248,47 @@ def _validate_devices(
                     )
                 )
             seen.setdefault(device_id, group)
-            spec = _validate_device(group, device_id, raw, issues, base_dir)
+            spec = _validate_device(key, home, device_id, raw, found, base_dir)
             if spec is not None:
                 devices.append(spec)
     return devices
+
+
+def _rehome(
+    group: Group,
+    device_id: str,
+    raw: dict[str, Any],
+    declared: dict[str, list[str]],
+    found: _Found,
+) -> Group | None:
+    """The table an original config.py's device belongs in: its own ``group``, or, for a
+    built-in device listed in the wrong dictionary (a motor among the sensors; the original
+    answered it by id all the same), its kind's table, or None if that table has the id too."""
+    name = raw.get("type", DEFAULT_KIND.get(group))
+    kind = get_device_kind(name) if isinstance(name, str) else None
+    if kind is None or kind.category == CATEGORY_OF_GROUP[group]:
+        return group
+    home = GROUP_OF_CATEGORY[kind.category]
+    key = f"{group}.{device_id}"
+    declared[group].remove(device_id)
+    if device_id in declared[home]:
+        found.warnings.append(
+            ConfigIssue(
+                key,
+                f"{name!r} {device_id!r} is listed among the {home} and again among the "
+                f"{group}; SimMeR 2 uses the one in {home} and ignores this entry" + ORIGINAL_RUNS,
+            )
+        )
+        return None
+    declared[home].append(device_id)
+    found.warnings.append(
+        ConfigIssue(
+            key,
+            f"is a {name!r}, which belongs among the {home}, not the {group}; SimMeR 2 moves "
+            f"it there (it still answers commands as {device_id!r})" + ORIGINAL_RUNS,
+        )
+    )
+    return home
 
 
 def _id_problem(device_id: str) -> str | None:
@@ -219,9 +305,10 @@ def _id_problem(device_id: str) -> str | None:
 
 
 def _validate_device(
-    group: Group, device_id: str, raw: dict[str, Any], issues: list[ConfigIssue], base_dir: Path
+    key: str, group: Group, device_id: str, raw: dict[str, Any], found: _Found, base_dir: Path
 ) -> DeviceSpec | None:
-    key = f"{group}.{device_id}"
+    """Validate one device written at ``key`` that lives in ``group``."""
+    issues = found.errors
     raw = dict(raw)
     if "id" in raw:
         issues.append(
@@ -270,6 +357,8 @@ def _validate_device(
     issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in problems]
     if problems:
         return None
+    for sub, message in params.strict_problems():
+        found.strict(f"{key}.{sub}", message)
     return DeviceSpec(device_id, group, str(kind_name), params)
 
 
@@ -346,7 +435,9 @@ def _check_references(settings: Settings, declared: dict[str, list[str]]) -> lis
     return issues
 
 
-def _check_placement(settings: Settings) -> list[ConfigIssue]:
+def _check_placement(settings: Settings, found: _Found) -> None:
+    """The robot must start in open floor; the block belongs there too, but an original
+    config.py may hide it (outside the maze, in a solid cell, under the robot)."""
     from simmer.world.maze import Block, Maze, robot_outline
 
     maze = Maze.from_settings(settings)
@@ -355,28 +446,46 @@ def _check_placement(settings: Settings) -> list[ConfigIssue]:
     pose = Pose(*settings.robot_start_position, settings.robot_start_rotation)
     robot = np.empty_like(outline)
     place_polygon(outline, pose.x, pose.y, pose.heading, robot)
-    issues = []
-    if polygon_hits_grid(robot, maze.hwall, maze.vwall, maze.solid, maze.cell):
-        issues.append(
+    robot_hit = polygon_hits_grid(robot, maze.hwall, maze.vwall, maze.solid, maze.cell)
+    if robot_hit:
+        found.errors.append(
             ConfigIssue(
                 "robot_start_position",
                 f"the robot at {list(settings.robot_start_position)} overlaps a wall, a solid "
                 f"cell or the maze edge; put it in an open cell, e.g. {maze.open_cell_centre()}",
             )
         )
+    where = f"the block at {list(settings.block_position)}"
     if polygon_hits_grid(block.polygon, maze.hwall, maze.vwall, maze.solid, maze.cell):
-        issues.append(
-            ConfigIssue(
-                "block_position",
-                f"the block at {list(settings.block_position)} overlaps a wall, a solid cell or "
-                "the maze edge; put it inside an open cell",
-            )
+        hidden = _hidden_place(maze, block.polygon)
+        found.strict(
+            "block_position",
+            f"{where} overlaps a wall, a solid cell or the maze edge; put it inside an open cell",
+            warning=f"{where} is {hidden}, so the robot can neither reach nor see it"
+            if hidden
+            else f"{where} overlaps a wall, a solid cell or the maze edge, so the robot cannot "
+            "reach it as usual",
         )
-    elif not issues and polygons_overlap(robot, block.polygon):
-        issues.append(
-            ConfigIssue("block_position", "the block overlaps the robot's start position")
+    elif not robot_hit and polygons_overlap(robot, block.polygon):
+        found.strict(
+            "block_position",
+            "the block overlaps the robot's start position",
+            warning="the block overlaps the robot's start position, so the robot starts "
+            "touching it, and a move that leaves it touching the block is undone",
         )
-    return issues
+
+
+def _hidden_place(maze: Maze, polygon: FloatArray) -> str | None:
+    """``"outside the maze"`` or ``"inside a solid cell"`` if the polygon lies wholly there."""
+    xs, ys = polygon[:, 0], polygon[:, 1]
+    if xs.max() <= 0 or ys.max() <= 0 or xs.min() >= maze.width or ys.min() >= maze.height:
+        return "outside the maze"
+    cells = {(int(x // maze.cell), int(y // maze.cell)) for x, y in polygon}
+    if len(cells) == 1:
+        ((col, row),) = cells
+        if 0 <= row < maze.rows and 0 <= col < maze.cols and maze.solid[row, col]:
+            return "inside a solid cell"
+    return None
 
 
 # ----------------------------------------------------------------------------- messages
@@ -484,6 +593,18 @@ def summarize(config: SimConfig) -> str:
         f"Block of {s.block_size:g} in at {list(s.block_position)}. "
         f"Robot starting at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg "
         f"with {', '.join(parts)}. "
-        f"Noise: {noise}; {bias}. {s.frame_rate:g} steps/s; replies are {s.reply_bytes}-byte "
-        f"floats; SimMeR TCP on {s.host}:{s.port_rx}/{s.port_tx}."
+        f"Noise: {noise}; {bias}. {s.frame_rate:g} steps/s; SimMeR TCP on "
+        f"{s.host}:{s.port_rx}/{s.port_tx}, replies {describe_replies(s)}."
     )
+
+
+def describe_replies(settings: Settings) -> str:
+    """What the two-port scheme and the serial port answer, for the start-up lines."""
+    if settings.protocol == "framed":
+        start, end = settings.frame_start, settings.frame_end
+        return (
+            f"in SimMeR v1.2 framed text ({start}u0{end} -> {start}u0:15.45{end}, "
+            f"{settings.round_digits} decimals)"
+        )
+    kind = "8-byte doubles" if settings.reply_bytes == 8 else "4-byte floats"
+    return f"as packed {kind}"

@@ -14,12 +14,13 @@ The table name is the device id. Motors default to ``type = "motor"``, drives to
 from __future__ import annotations
 
 import codecs
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, replace
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 from simmer.devices.base import Color, DeviceParams
+from simmer.errors import ConfigIssue
 
 Point = tuple[float, float]
 
@@ -50,8 +51,25 @@ class Settings(BaseModel):
     seed: int | None = Field(
         None, ge=0, description="Noise seed when rand_error is false (default: floor_seed)."
     )
+    protocol: Literal["packed", "framed"] = Field(
+        "packed",
+        description="What the two-port scheme and the serial port speak: 'packed' floats "
+        "(SimMeR v1.0/v1.1, the Arduino examples) or 'framed' text, [u0] -> [u0:15.45] "
+        "(SimMeR v1.2). The persistent protocol always sends packed frames.",
+    )
     reply_bytes: Literal[4, 8] = Field(
-        4, description="Reply width: 4 (float32, SimMeR 1.1, Arduino) or 8 (float64, SimMeR 1.0)."
+        4, description="Packed reply width: 4 (float32, SimMeR v1.1, Arduino) or 8 (float64, v1.0)."
+    )
+    frame_start: str = Field("[", description="Framed protocol: the character opening a frame.")
+    frame_end: str = Field("]", description="Framed protocol: the character closing a frame.")
+    round_digits: int = Field(
+        3, ge=0, le=15, description="Framed protocol: decimals of a reading in a reply."
+    )
+    lenient_commands: bool = Field(
+        False,
+        description="Read commands as the original SimMeR did: skip the third character "
+        "whatever it is, read an unreadable value as 0 (logged once). On by itself for a "
+        "SimMeR config.py; off: such commands answer NaN.",
     )
     plugins: tuple[str, ...] = Field(
         (), description="Python files or modules that register device kinds of your own."
@@ -106,6 +124,20 @@ class Settings(BaseModel):
             raise ValueError("both strengths must be 0 or more")
         return value
 
+    @field_validator("frame_start", "frame_end")
+    @classmethod
+    def _frame_character(cls, value: str, info: ValidationInfo) -> str:
+        if len(value) != 1 or not value.isascii() or not value.isprintable() or value in ",:- ":
+            raise ValueError(
+                f"must be one printable ASCII character other than , : - and space, "
+                f"not {value!r}; SimMeR v1.2 uses '[' and ']'"
+            )
+        if info.field_name == "frame_end" and value == info.data.get("frame_start"):
+            raise ValueError(
+                f"frame_start is {value!r} too; the two must differ (SimMeR v1.2 uses '[' and ']')"
+            )
+        return value
+
     @field_validator("str_encoding")
     @classmethod
     def _known_encoding(cls, value: str) -> str:
@@ -135,11 +167,25 @@ class DeviceSpec:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """A whole validated configuration: settings plus devices, and where it came from."""
+    """A whole validated configuration: settings plus devices, and where it came from.
+
+    ``warnings`` are what a native file may not have but an original SimMeR ``config.py`` did
+    and still runs (a hidden block, an arc drive...); the loader collects them, the CLI prints
+    them.
+    """
 
     settings: Settings
     devices: tuple[DeviceSpec, ...]
     source: str = "<built-in default>"
+    warnings: tuple[ConfigIssue, ...] = ()
+    origin: str = ""
+    """For an original ``config.py``: which release it looks like and what that means for the
+    replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
+
+    def with_settings(self, **updates: Any) -> SimConfig:
+        """The same configuration with some settings replaced (validated), e.g. from the CLI."""
+        settings = Settings.model_validate({**self.settings.model_dump(), **updates})
+        return replace(self, settings=settings)
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""

@@ -4,9 +4,13 @@ The file runs as Python with stand-ins for what it imports (:mod:`simmer.compat.
 its globals are mapped to the native schema, then validated like a TOML file, so every message
 applies, with the config.py line where the setting is written:
 
-* top-level names that are SimMeR settings (BEHAVIOUR §8) are kept; SimMeR's own extras
-  (``frame_start``, ``frame_end``, ``round_digits``, ``maze_dim_x``, ``maze_dim_y``) and helper
-  variables (``m0_info``...) are ignored;
+* top-level names that are SimMeR settings (BEHAVIOUR §8) are kept; the derived maze sizes
+  (``maze_dim_x``, ``maze_dim_y``) and helper variables (``m0_info``...) are ignored;
+* which original the file was written for decides what the two-port scheme and the serial port
+  speak, unless the file says (``protocol``, ``reply_bytes``): ``frame_start``/``frame_end``
+  mean SimMeR v1.2 (framed text), ``maze_dim_x`` without them v1.1 (4-byte floats), neither
+  v1.0 (8-byte doubles) (BEHAVIOUR §6.1); commands are read the originals' way
+  (``lenient_commands``, BEHAVIOUR §6.2);
 * the keys of ``motors``, ``drives`` and ``sensors`` are the device ids; an info dictionary's
   ``'id'`` that disagrees is reported in the log and otherwise ignored;
 * ``pm.Vector2`` becomes ``[x, y]``, tuples become lists, a drive's list of motor objects
@@ -29,22 +33,20 @@ import os
 import tokenize
 import traceback
 import types
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from simmer.compat import template
 from simmer.compat.standins import StandInDevice, StandIns, Vector2, builtin_kind, captured_info
-from simmer.config.loader import config_from_dict
+from simmer.config.loader import DEFAULT_KIND, config_from_dict
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
-from simmer.errors import ConfigError, ConfigIssue
+from simmer.errors import ConfigError, ConfigIssue, describe_exception
 
 log = logging.getLogger(__name__)
 
-IGNORED_SETTINGS = frozenset(
-    {"frame_start", "frame_end", "round_digits", "maze_dim_x", "maze_dim_y"}
-)
-"""SimMeR settings that SimMeR 2 does without (framing, rounding, derived maze sizes)."""
+IGNORED_SETTINGS = frozenset({"maze_dim_x", "maze_dim_y"})
+"""SimMeR settings that SimMeR 2 derives itself (the maze's size in inches)."""
 
 
 @dataclass
@@ -59,6 +61,10 @@ class SimmerPy:
     data: dict[str, Any]
     spans: dict[str, tuple[int, int]] = field(default_factory=dict)
     comments: dict[int, str] = field(default_factory=dict)
+    version: str = ""
+    """The original release the file was written for: ``v1.0``, ``v1.1`` or ``v1.2``."""
+    origin: str = ""
+    """What that means for a run, said at start (see :func:`original_protocol`)."""
 
     def line_of(self, key: str) -> int | None:
         """The line of ``key`` or of its nearest written parent (``a.b[2].c`` -> ``a.b``...)."""
@@ -79,15 +85,23 @@ class SimmerPy:
 
 
 def load_simmer_py(path: str | Path) -> SimConfig:
-    """Load a SimMeR ``config.py``; raise :class:`ConfigError` naming file and line on problems."""
+    """Load a SimMeR ``config.py``; raise :class:`ConfigError` naming file and line on problems.
+
+    Checked as an original (BEHAVIOUR §6.3): what the original ran but a TOML file may not have
+    is in the result's ``warnings``, with lines like errors.
+    """
     source = read_simmer_py(path)
+
+    def placed(issue: ConfigIssue) -> ConfigIssue:
+        return replace(issue, line=issue.line or source.line_of(issue.key))
+
     try:
-        return config_from_dict(source.data, str(source.path), source.path.parent)
+        config = config_from_dict(source.data, str(source.path), source.path.parent, original=True)
     except ConfigError as exc:
-        raise ConfigError(
-            exc.source,
-            [ConfigIssue(i.key, i.message, i.line or source.line_of(i.key)) for i in exc.issues],
-        ) from None
+        raise ConfigError(exc.source, [placed(issue) for issue in exc.issues]) from None
+    # in the order of the file
+    warnings = tuple(sorted(map(placed, config.warnings), key=lambda issue: issue.line or 0))
+    return replace(config, warnings=warnings, origin=source.origin)
 
 
 def read_simmer_py(path: str | Path) -> SimmerPy:
@@ -142,20 +156,17 @@ def _run(path: Path, code: types.CodeType) -> dict[str, Any]:
         with stand_ins:
             exec(code, config.__dict__)
     except (Exception, SystemExit) as exc:
-        raise ConfigError(path, [_exception_issue(exc, path, device_dirs)]) from None
+        raise ConfigError(path, [_exception_issue(exc, path)]) from None
     finally:
         for module in stand_ins.user_modules.values():
             template.remember_module(module, config)
     return config.__dict__
 
 
-def _exception_issue(
-    exc: Exception | SystemExit, path: Path, device_dirs: list[Path]
-) -> ConfigIssue:
+def _exception_issue(exc: Exception | SystemExit, path: Path) -> ConfigIssue:
     frames = [f for f in _frames(exc) if Path(f[0]).resolve() == path.resolve()]
     line = frames[-1][1] if frames else None
-    user_files = [p for d in device_dirs for p in d.glob("*.py")]
-    what = template.describe_exception(exc, user_files)
+    what = describe_exception(exc, path.parent)
     if isinstance(exc, ModuleNotFoundError):
         hint = (
             "while loading a SimMeR config.py, SimMeR 2 provides pygame.math and the devices "
@@ -233,6 +244,7 @@ class _Mapper:
         for name in Settings.model_fields:
             if name in self.namespace:
                 data[name] = _plain(self.namespace[name])
+        self.result.version, self.result.origin = original_protocol(self.namespace, data)
         self._warn_unknown_names()
         last_line = max((n.lineno for n in self.assigned.values()), default=1)
         for group in DEVICE_GROUPS:
@@ -281,6 +293,8 @@ class _Mapper:
                 )
 
     def _group(self, group: str, table: dict[Any, Any]) -> dict[str, Any]:
+        if group == DEVICE_GROUPS[0]:
+            self._name_motors()
         entries = _dict_entries(self.assigned.get(group))
         out: dict[str, Any] = {}
         for key, device in table.items():
@@ -290,12 +304,21 @@ class _Mapper:
             if entry is not None:
                 self.result.spans[path] = _span(entry[1], entry[0])
                 self._info_spans(path, entry[1])
-            if group == "motors":
-                self.motor_ids[id(device)] = device_id
             native = self._device(group, device_id, device)
             if native is not None:
                 out[device_id] = native
         return out
+
+    def _name_motors(self) -> None:
+        """Know every motor object by its id before any drive lists motors: those in
+        ``motors`` first, then any listed only elsewhere (the original ran a motor among the
+        sensors; the loader moves it)."""
+        for group in DEVICE_GROUPS:
+            table = self.namespace.get(group)
+            if isinstance(table, dict):
+                for key, device in table.items():
+                    if isinstance(device, StandInDevice) and builtin_kind(device) == "motor":
+                        self.motor_ids.setdefault(id(device), str(key))
 
     def _info_spans(self, path: str, call: ast.expr) -> None:
         """Record the lines of each key of the info dictionary a device was built from."""
@@ -337,7 +360,7 @@ class _Mapper:
         kind = builtin_kind(device)
         if kind is None:
             return self._user_device(group, path, device, native)
-        if kind not in ("motor", "drive"):
+        if kind != DEFAULT_KIND.get(group):  # a motor among the sensors says so
             native = {"type": kind, **native}
         self._drop_meaningless(path, kind, native)
         return native
@@ -393,6 +416,37 @@ class _Mapper:
         if isinstance(value, StandInDevice):
             return self.motor_ids.get(id(value), value)
         return _plain(value, self._value)
+
+
+def original_protocol(namespace: dict[str, Any], data: dict[str, Any]) -> tuple[str, str]:
+    """Which original wrote this config.py, and the protocol settings that follow from it.
+
+    Fills ``protocol``, ``reply_bytes`` and ``lenient_commands`` in ``data`` unless the file
+    sets them itself; returns the version and a sentence saying what replies will look like.
+    """
+    if "frame_start" in namespace or "frame_end" in namespace:
+        version, why = "v1.2", "it sets frame_start/frame_end"
+        data.setdefault("protocol", "framed")
+    elif "maze_dim_x" in namespace:
+        version, why = "v1.1", "it sets maze_dim_x and no frame_start"
+        data.setdefault("protocol", "packed")
+        data.setdefault("reply_bytes", 4)
+    else:
+        version, why = "v1.0", "it sets neither maze_dim_x nor frame_start"
+        data.setdefault("protocol", "packed")
+        data.setdefault("reply_bytes", 8)
+    data.setdefault("lenient_commands", True)
+    chosen = [name for name in ("protocol", "reply_bytes") if name in namespace]
+    own = f", but it sets {' and '.join(chosen)}" if chosen else ""
+    if data["protocol"] == "framed":
+        start, end = data.get("frame_start", "["), data.get("frame_end", "]")
+        replies = f"replies are framed text ({start}u0{end} -> {start}u0:15.45{end}); set "
+        replies += "protocol = 'packed' to change"
+    else:
+        width = data.get("reply_bytes", 4)
+        kind = "8-byte doubles" if width == 8 else "4-byte floats"
+        replies = f"replies are {kind}; set reply_bytes to change"
+    return version, f"looks like a SimMeR {version} config ({why}){own}: {replies}"
 
 
 def _dict_entries(node: ast.expr | None) -> dict[str, tuple[ast.expr, ast.expr]]:

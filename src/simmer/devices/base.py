@@ -34,7 +34,13 @@ Color = tuple[int, int, int]
 
 
 class DeviceParams(BaseModel):
-    """Settings every device has (BEHAVIOUR §4). Kinds subclass this to add their own."""
+    """Settings every device has (BEHAVIOUR §4). Kinds subclass this to add their own.
+
+    Checks beyond single fields go in two methods returning (key, message) pairs:
+    :meth:`problems` for mistakes that stop the device working (always errors), and
+    :meth:`strict_problems` for settings the original SimMeR ran but a native configuration may
+    not have (errors in a TOML file, warnings for an original ``config.py``).
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -51,6 +57,11 @@ class DeviceParams(BaseModel):
 
     def problems(self) -> list[tuple[str, str]]:
         """Mistakes that involve several settings, as (key, message) pairs; none by default."""
+        return []
+
+    def strict_problems(self) -> list[tuple[str, str]]:
+        """Settings the original SimMeR ran that SimMeR 2 refuses in its own format; none by
+        default."""
         return []
 
 

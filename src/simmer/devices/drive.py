@@ -4,6 +4,11 @@
 command is refused with NaN while any drive of the robot is moving and accepted with +inf.
 Each step the drive advances by at most ``speed / frame_rate``; the motion carries the drive's
 bias, and the motors' odometers advance even if a collision undoes the motion.
+
+A drive with both ``velocity`` and ``ang_velocity`` (which only an original ``config.py`` may
+have, BEHAVIOUR §6.3) moves as the original did: its speed is ``|velocity| + |ang_velocity|``
+units per second, and each unit moves the robot 1 in along the velocity and turns it 1 degree
+clockwise, so the robot follows an arc.
 """
 
 from __future__ import annotations
@@ -31,7 +36,8 @@ class Axes(BaseModel):
 
 
 class DriveParams(DeviceParams):
-    """Drive settings: exactly one of ``velocity`` / ``ang_velocity`` is non-zero."""
+    """Drive settings: exactly one of ``velocity`` / ``ang_velocity`` is non-zero (an original
+    ``config.py`` may set both: an arc, see the module docstring)."""
 
     type: str = "drive"
     visible: bool = False
@@ -40,24 +46,16 @@ class DriveParams(DeviceParams):
     )
     ang_velocity: float = Field(0.0, description="Rotation speed in deg/s (clockwise positive).")
     motors: tuple[str, ...] = Field((), description="Ids of the motors this drive turns.")
-    motor_direction: tuple[float, ...] = Field((), description="+1 or -1 for each motor.")
+    motor_direction: tuple[float, ...] = Field(
+        (), description="+1 or -1 for each motor (multiplies its odometer)."
+    )
     bias: Axes = Field(Axes(), description="Systematic extra motion per unit commanded.")
     error: Axes = Field(Axes(), description="Percent error of the commanded amount.")
 
     def problems(self) -> list[tuple[str, str]]:
-        """Cross-field mistakes, as (key, message) pairs."""
+        """Mistakes that would stop the drive working at all, as (key, message) pairs."""
         found: list[tuple[str, str]] = []
-        translates = self.velocity != (0.0, 0.0)
-        rotates = self.ang_velocity != 0.0
-        if translates and rotates:
-            found.append(
-                (
-                    "ang_velocity",
-                    "a drive either translates (velocity) or rotates (ang_velocity), never both; "
-                    "make two drives, or set one of them to 0",
-                )
-            )
-        if not translates and not rotates:
+        if self.velocity == (0.0, 0.0) and self.ang_velocity == 0.0:
             found.append(
                 ("velocity", "the drive never moves: give a non-zero velocity or ang_velocity")
             )
@@ -69,9 +67,30 @@ class DriveParams(DeviceParams):
                     f"{len(self.motors)}; give one direction (+1 or -1) per motor",
                 )
             )
+        return found
+
+    def strict_problems(self) -> list[tuple[str, str]]:
+        """Settings the original SimMeR ran (an arc drive, an omni wheel's direction) but a
+        native configuration may not have, as (key, message) pairs."""
+        found: list[tuple[str, str]] = []
+        if self.velocity != (0.0, 0.0) and self.ang_velocity != 0.0:
+            found.append(
+                (
+                    "ang_velocity",
+                    "a drive either translates (velocity) or rotates (ang_velocity), never both; "
+                    "with both, each unit commanded moves the robot 1 in along velocity and "
+                    "turns it 1 degree (an arc); make two drives, or set one of them to 0",
+                )
+            )
         for i, direction in enumerate(self.motor_direction):
             if direction not in (1.0, -1.0):
-                found.append((f"motor_direction[{i}]", f"must be 1 or -1, not {direction:g}"))
+                found.append(
+                    (
+                        f"motor_direction[{i}]",
+                        f"must be 1 or -1, not {direction:g}; another value multiplies the "
+                        "motor's odometer (as for an omni wheel)",
+                    )
+                )
         return found
 
 
@@ -86,7 +105,7 @@ class Motion:
 
 
 class Drive(Device):
-    """Moves the robot along ``velocity`` or turns it at ``ang_velocity``, over several steps."""
+    """Moves the robot along ``velocity``, turns it at ``ang_velocity``, or both (an arc)."""
 
     category: ClassVar[Category] = "drive"
     Params = DriveParams
@@ -96,13 +115,14 @@ class Drive(Device):
         assert isinstance(params, DriveParams)
         self.settings = params
         self.bias = params.bias
-        self.rotational = params.ang_velocity != 0.0
-        if self.rotational:
-            self.speed = abs(params.ang_velocity)
-            self.unit = (0.0, 0.0)
-        else:
-            self.speed = math.hypot(*params.velocity)
-            self.unit = (params.velocity[0] / self.speed, params.velocity[1] / self.speed)
+        linear = math.hypot(*params.velocity)
+        self.rotational = linear == 0.0  # only turns: its amounts are degrees
+        # per unit commanded: inches along the velocity (robot frame) and degrees turned
+        self.unit = (
+            (params.velocity[0] / linear, params.velocity[1] / linear) if linear else (0.0, 0.0)
+        )
+        self.turn = 1.0 if params.ang_velocity != 0.0 else 0.0
+        self.speed = linear + abs(params.ang_velocity)  # units per second
         self.motors: list[Motor] = []
         self.gains: list[float] = []
         self.remaining = 0.0
@@ -150,9 +170,7 @@ class Drive(Device):
         if world.robot.any_drive_moving:
             return math.nan
         error = self.settings.error
-        error_total = self.unit[0] * error.x + self.unit[1] * error.y
-        if self.rotational:
-            error_total += error.rotation
+        error_total = self.unit[0] * error.x + self.unit[1] * error.y + self.turn * error.rotation
         self.remaining = self.percent_error(value, error_total)
         return math.inf
 
@@ -170,10 +188,9 @@ class Drive(Device):
         for motor, gain in zip(self.motors, self.gains, strict=True):
             motor.odometer += step * gain
         bias = self.bias
-        rotation = step * bias.rotation + (step if self.rotational else 0.0)
         return Motion(
-            dx=self.unit[0] * step + step * bias.x,
-            dy=self.unit[1] * step + step * bias.y,
-            rotation=rotation,
+            dx=(self.unit[0] + bias.x) * step,
+            dy=(self.unit[1] + bias.y) * step,
+            rotation=(self.turn + bias.rotation) * step,
             step=step,
         )

@@ -37,7 +37,9 @@ class UltrasonicParams(MeasuredParams):
     height: float | None = Field(
         None, gt=0, description="Mounting height in inches; defaults to the block size."
     )
-    beamwidth: float = Field(15.0, gt=0, lt=180, description="Cone angle in degrees.")
+    beamwidth: float = Field(
+        15.0, ge=0, lt=180, description="Cone angle in degrees (0 only in an original config.py)."
+    )
     num_rays: int = Field(7, ge=1, le=1000, description="Rays cast across the cone.")
     min_range: float = Field(0.0, ge=0, description="Shortest reading, inches.")
     max_range: float = Field(433.0, gt=0, description="Longest reading, inches.")
@@ -51,6 +53,19 @@ class UltrasonicParams(MeasuredParams):
                 (
                     "max_range",
                     f"must be greater than min_range ({self.min_range:g}), got {self.max_range:g}",
+                )
+            ]
+        return []
+
+    def strict_problems(self) -> list[tuple[str, str]]:
+        """``beamwidth = 0``, which the original ran as a single ray, as a (key, message) pair."""
+        if self.beamwidth == 0.0:
+            return [
+                (
+                    "beamwidth",
+                    "must be greater than 0; a beamwidth of 0 sends every ray along the "
+                    "sensor's heading, so it reads like a single ray: for that, set "
+                    "num_rays = 1 (with any beamwidth)",
                 )
             ]
         return []
