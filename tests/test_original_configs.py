@@ -16,7 +16,6 @@ from typing import Any
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
-import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -203,7 +202,7 @@ def test_arc_drive_error_and_bias_apply_per_unit(tmp_path: Path) -> None:
         ),
     )
     sim = Simulation(load_config(path), seed=2)
-    draw = float(np.random.default_rng(2).normal(0.0, 2.0))
+    draw = float(sim.stream("device:w0").normal(0.0, 2.0))  # w0's own stream, fresh
     assert sim.command("w0-6") == [math.inf]
     amount = 6 + draw * (0.05 + 1) * 6  # unit velocity . (x, y) error + rotation error
     assert sim.robot.drives["w0"].remaining == pytest.approx(amount)

@@ -10,8 +10,9 @@ A device kind is a subclass of :class:`Device` with
 * optionally ``shapes(world)``: what to draw of its latest measurement.
 
 It is registered by name with :func:`simmer.devices.register_device_kind`. The constructor takes
-the device id, its validated parameters and the simulation's random generator: every random
-draw must come from that generator, so a seeded run is repeatable.
+the device id, its validated parameters and its own random stream (from the run's seed and the
+device id): every random draw must come from that generator, so a seeded run is repeatable and
+one device's draws never shift another's.
 """
 
 from __future__ import annotations
@@ -166,6 +167,6 @@ class Device:
 
     def percent_error(self, value: float, error: float) -> float:
         """SimMeR's percent error: ``value + gauss(0, 2) · error · value`` (BEHAVIOUR §4)."""
-        if error == 0.0:
+        if error == 0.0 or value == 0.0:  # nothing to scale: no draw (a w0-0 poll draws none)
             return value
         return value + float(self.rng.normal(0.0, 2.0)) * error * value

@@ -1,12 +1,14 @@
 """The simulation: a world of maze, block and robot, stepped at a fixed rate.
 
 One thread owns a :class:`Simulation`; transports hand it commands through a queue (see
-``simmer.transport``) and never touch it themselves. All randomness comes from one seeded
-``numpy.random.Generator`` per simulation, so a run is repeatable from its seed.
+``simmer.transport``) and never touch it themselves. All randomness comes from the run's seed,
+one stream per source (each device, each drive's drawn bias: :meth:`Simulation.stream`), so a
+run is repeatable from its seed and one source's draws never shift another's.
 """
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import math
 from collections.abc import Iterable, Mapping
@@ -70,17 +72,27 @@ class Simulation:
         """Load a configuration file (None: the built-in default) and build a simulation."""
         return cls(load_config(path), seed=seed)
 
+    def stream(self, source: str) -> np.random.Generator:
+        """A fresh random generator for one source of noise (``device:u0``, ``bias:w0``).
+
+        Each source's stream comes from the run's seed and the source's name alone
+        (``SeedSequence`` with a stable key), so adding a sensor, removing one or polling a
+        drive never changes another source's noise.
+        """
+        digest = hashlib.blake2b(source.encode("utf-8"), digest_size=8).digest()
+        key = int.from_bytes(digest, "little")
+        return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(key,)))
+
     def _build(self) -> None:
-        """Create robot, block and devices at their start, with a fresh generator."""
+        """Create robot, block and devices at their start, each device with a fresh stream."""
         settings = self.config.settings
-        self.rng = np.random.default_rng(self.seed)
         self._block = Block.from_settings(settings)
         devices: list[Device] = []
         for spec in self.config.devices:
             kind = get_device_kind(spec.kind)
             if kind is None:
                 raise DeviceKindError(f"device kind {spec.kind!r} is no longer registered")
-            devices.append(kind(spec.id, spec.params, self.rng))
+            devices.append(kind(spec.id, spec.params, self.stream(f"device:{spec.id}")))
         start = Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
         self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
         self._switched_off: dict[str, str] = {}
@@ -101,9 +113,10 @@ class Simulation:
         """``rand_bias``: x, y ~ N(0, linear); rotation ~ N(0, rotational) for a translating
         drive (degrees per inch), N(0, linear) for a rotating one (a fraction, like x and y)."""
         linear, rotational = self.config.settings.bias_strength
-        x, y = self.rng.normal(0.0, linear, 2) if linear else (0.0, 0.0)
+        rng = self.stream(f"bias:{drive.id}")
+        x, y = rng.normal(0.0, linear, 2) if linear else (0.0, 0.0)
         spread = linear if drive.rotational else rotational
-        rotation = float(self.rng.normal(0.0, spread)) if spread else 0.0
+        rotation = float(rng.normal(0.0, spread)) if spread else 0.0
         return Axes(x=float(x), y=float(y), rotation=rotation)
 
     # ----------------------------------------------------------------- the World protocol
