@@ -69,3 +69,18 @@ def test_console_prints_replies() -> None:
     assert shown[1] == "u1: 3.500"
     assert shown[2] == "w0-abc: nan"
     assert format_reply(math.inf) == "+inf (accepted)"
+
+
+def test_importing_the_client_does_not_load_the_simulator() -> None:
+    """A control program pays only for the link: no NumPy, Numba or pydantic."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, simmer.client\n"
+        "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'simmer.world') if m in sys.modules]\n"
+        "print(','.join(heavy))"
+    )
+    command = [sys.executable, "-c", code]
+    result = subprocess.run(command, capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == ""
