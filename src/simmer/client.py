@@ -10,7 +10,8 @@
 ``connect(serial="/dev/pts/3")`` a serial port: the simulator's virtual one or the robot's
 Bluetooth port. Add ``framed=True`` to either for SimMeR v1.2's framed text (``[u0]`` ->
 ``[u0:15.45]``; ``True``/``DRIVE STOP`` read as +inf, ``False``/``Not Found`` as NaN, and the
-reply's text is kept in ``last_text``). The calls are the same whichever you choose.
+reply's text is kept in ``last_text``). The calls are the same whichever you choose. Over the
+persistent protocol, :meth:`Client.explain` asks why the last message's NaN replies are NaN.
 """
 
 from __future__ import annotations
@@ -24,7 +25,9 @@ from typing import Literal, Protocol
 
 from simmer.errors import ConnectionFailed, ReplyTimeout
 from simmer.protocol import (
+    EXPLAIN,
     FRAME_HEADER,
+    TEXT_WIDTH,
     framed_value,
     read_frame_header,
     read_framed_reply,
@@ -95,6 +98,19 @@ class StreamLink:
             return unpack_replies(_recv_exactly(self._sock, width * count), width)
         except TimeoutError:
             raise ReplyTimeout(f"no reply to {message!r} from {self.address}") from None
+        except OSError as exc:
+            raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
+
+    def explain(self) -> str:
+        """Why the last message's NaN replies are NaN, one reason a line ("" if none)."""
+        try:
+            self._sock.sendall(EXPLAIN + b"\n")
+            width, size = FRAME_HEADER.unpack(_recv_exactly(self._sock, FRAME_HEADER.size))
+            if width != TEXT_WIDTH:
+                raise ConnectionFailed(f"{self.address} answered '?' with values, not text")
+            return _recv_exactly(self._sock, size).decode("utf-8", errors="replace")
+        except TimeoutError:
+            raise ReplyTimeout(f"no answer to '?' from {self.address}") from None
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
 
@@ -218,6 +234,12 @@ class Client:
     def drive(self, drive_id: str, amount: float) -> float:
         """Start drive ``drive_id`` moving ``amount`` in (or deg): +inf accepted, NaN busy."""
         return self.send(f"{drive_id}-{amount:g}")[0]
+
+    def explain(self) -> str | None:
+        """Why the last message's NaN replies are NaN, as the simulator logged it (a reason a
+        line, "" if none); None where the link cannot ask (two-port, serial: only the
+        persistent protocol has a way to)."""
+        return self.link.explain() if isinstance(self.link, StreamLink) else None
 
     def read(self, device_id: str) -> float:
         """Read one sensor (or motor odometer)."""

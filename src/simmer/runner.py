@@ -19,6 +19,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from simmer.protocol import printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 
@@ -30,6 +31,11 @@ MAX_LAG = 0.25
 """If stepping falls this many wall seconds behind, drop the backlog instead of racing."""
 MAX_WAIT = 0.05
 """Longest single wait, so a stop request is noticed promptly."""
+MAX_LOGGED = 3
+"""Why-NaN lines logged per message; the rest are counted in one more line, so a message of
+1,000 bad commands writes four lines, not 1,000."""
+MAX_REASONS = 20
+"""Why-NaN reasons kept per message for the client (the persistent protocol's ``?``)."""
 
 FrameCallback = Callable[["Runner"], bool]
 
@@ -85,25 +91,56 @@ class Runner:
         self.sim.step()
 
     def handle(self, request: Request) -> list[float]:
-        """Execute one request on the simulation and fulfil its future."""
+        """Execute one request on the simulation and fulfil its future. Why its NaN replies are
+        NaN is logged (bounded, see :data:`MAX_LOGGED`) and kept in ``request.reasons``."""
         decoded = request.decoded
         if decoded.text is None:
-            log.warning("bad message from %s: %s", request.client, decoded.error)
+            error = printable(str(decoded.error))
+            log.warning("bad message from %s: %s", printable(request.client), error)
+            request.reasons.append(error)
             replies = [math.nan] * decoded.count
             message = f"<{decoded.error}>"
         else:
-            replies = self.sim.command(decoded.text)
+            records: list[tuple[int, str]] = []
+            replies = self.sim.command(decoded.text, records)
             message = decoded.text
+            self._report(printable(request.client), records, request.reasons)
         self.history.append(Exchange(self.sim.time, request.client, message, tuple(replies)))
         request.future.set_result(replies)
         return replies
 
+    @staticmethod
+    def _report(client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
+        """Log the first few (level, text) records of one message and count the rest; keep
+        the first :data:`MAX_REASONS` for the client."""
+        for level, text in records[:MAX_LOGGED]:
+            log.log(level, "%s: %s", client, text)
+        more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])
+        if more:
+            log.warning("%s: %d more bad commands in that message, not logged", client, more)
+        reasons.extend(text for _, text in records[:MAX_REASONS])
+        if len(records) > MAX_REASONS:
+            reasons.append(f"... and {len(records) - MAX_REASONS} more")
+
     def serve(self, timeout: float = 0.0) -> int:
-        """Answer every queued request, waiting up to ``timeout`` s for one; how many."""
+        """Answer the requests queued once the wait (up to ``timeout`` s) ends; how many.
+
+        Requests queued meanwhile (a client refilling its pipeline as replies go out) wait for
+        the next turn, so one busy client cannot keep the others waiting. A request whose
+        handling raises gets the exception instead of replies; the loop goes on.
+        """
         self.bus.wait(timeout)
         served = 0
-        while (request := self.bus.get()) is not None:
-            self.handle(request)
+        for _ in range(self.bus.queued):
+            request = self.bus.get()
+            if request is None:
+                break
+            try:
+                self.handle(request)
+            except Exception as exc:
+                log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
+                if not request.future.done():
+                    request.future.set_exception(exc)
             served += 1
         return served
 

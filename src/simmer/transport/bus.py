@@ -9,16 +9,25 @@ The loop sleeps in :meth:`CommandBus.wait`, a ``select`` over a wake-up pipe and
 transport asked it to :meth:`~CommandBus.watch`. A watched socket's callback runs in the loop
 thread itself, so a transport can read a message and have it executed and answered with no
 thread hand-off at all (the persistent protocol does this: it is where its latency goes).
+:meth:`CommandBus.call_later` runs a callback there after a delay (timeouts, back-off).
+
+No exception from a callback ends the loop: a watched socket whose callback raises is no longer
+watched and its ``on_error`` is told (the transports log it with the client and close that
+connection); a timer's exception is logged. Everyone else goes on being served.
 """
 
 from __future__ import annotations
 
 import contextlib
+import heapq
+import itertools
+import logging
 import os
 import queue
 import selectors
 import socket
 import threading
+import time
 import weakref
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -27,8 +36,12 @@ from dataclasses import dataclass, field
 from simmer.errors import SimmerError
 from simmer.protocol import Decoded
 
+log = logging.getLogger("simmer.transport")
+
 Watcher = Callable[[int], bool]
 """Called in the loop thread with the ready ``selectors`` events; return False to stop watching."""
+ErrorHandler = Callable[[Exception], None]
+"""Called in the loop thread when a watcher raised (the socket is no longer watched)."""
 
 
 class BusClosed(SimmerError):
@@ -42,6 +55,24 @@ class Request:
     decoded: Decoded
     client: str
     future: Future[list[float]] = field(default_factory=Future)
+    reasons: list[str] = field(default_factory=list)
+    """Why some replies are NaN, filled in by the loop before the future completes (the
+    persistent protocol's ``?`` sends them)."""
+
+
+class Timer:
+    """A callback the loop thread runs once, at monotonic time ``when``, unless cancelled."""
+
+    __slots__ = ("callback", "cancelled", "when")
+
+    def __init__(self, when: float, callback: Callable[[], None]) -> None:
+        self.when = when
+        self.callback = callback
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        """Do not run it (any thread)."""
+        self.cancelled = True
 
 
 def _release(selector: selectors.BaseSelector, *fds: int) -> None:
@@ -61,10 +92,13 @@ class CommandBus:
     def __init__(self) -> None:
         self._queue: queue.SimpleQueue[Request] = queue.SimpleQueue()
         self._lock = threading.Lock()
+        self._timer_lock = threading.Lock()
         self._closed = False
         self._clients: dict[str, str] = {}
         self._selector = selectors.DefaultSelector()
         self._watch_lock = threading.RLock()
+        self._timers: list[tuple[float, int, Timer]] = []
+        self._timer_order = itertools.count()
         self._wake_r, self._wake_w = os.pipe()
         os.set_blocking(self._wake_r, False)
         os.set_blocking(self._wake_w, False)
@@ -73,16 +107,29 @@ class CommandBus:
 
     def submit(self, message: Decoded | str, client: str) -> Future[list[float]]:
         """Queue a message (text or already-decoded bytes); the future holds its replies."""
+        return self.request(message, client).future
+
+    def request(self, message: Decoded | str, client: str) -> Request:
+        """Queue a message like :meth:`submit`; the request also carries the NaN reasons."""
         decoded = Decoded(message) if isinstance(message, str) else message
         request = Request(decoded, client)
         with self._lock:
             if self._closed:
                 request.future.set_exception(BusClosed("the simulation has stopped"))
-                return request.future
+                return request
             self._queue.put(request)
-            with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
-                os.write(self._wake_w, b"\0")
-        return request.future
+            self._wake()
+        return request
+
+    def _wake(self) -> None:
+        """Interrupt the loop's wait (caller holds ``_lock`` and the bus is open)."""
+        with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
+            os.write(self._wake_w, b"\0")
+
+    @property
+    def queued(self) -> int:
+        """How many requests wait for the loop."""
+        return self._queue.qsize()
 
     @property
     def closed(self) -> bool:
@@ -97,10 +144,14 @@ class CommandBus:
             return None
 
     def wait(self, timeout: float) -> None:
-        """Loop thread: sleep until a request arrives or a watched socket is ready (at most
-        ``timeout`` s), running the ready sockets' callbacks."""
+        """Loop thread: sleep until a request arrives, a watched socket is ready or a timer is
+        due (at most ``timeout`` s), running the ready sockets' callbacks and due timers."""
+        timeout = 0.0 if not self._queue.empty() else max(timeout, 0.0)
+        with self._timer_lock:
+            if self._timers:
+                timeout = min(timeout, max(0.0, self._timers[0][0] - time.monotonic()))
         try:
-            ready = self._selector.select(0.0 if not self._queue.empty() else max(timeout, 0.0))
+            ready = self._selector.select(timeout)
         except ValueError:  # closed by another thread meanwhile
             if self._closed:
                 return
@@ -114,20 +165,76 @@ class CommandBus:
             with self._watch_lock:
                 if self._closed or self._selector.get_map().get(key.fd) is not key:
                     continue  # unwatched meanwhile
-                if not key.data(events):
-                    with contextlib.suppress(KeyError, ValueError):  # it may have unwatched
-                        self._selector.unregister(key.fileobj)
+                callback, on_error = key.data
+                try:
+                    keep = callback(events)
+                except Exception as exc:
+                    self._unregister(key)
+                    self._failed(on_error, exc)
+                    continue
+                if not keep:
+                    self._unregister(key)
+        self._run_timers()
 
-    def watch(self, sock: socket.socket, callback: Watcher, events: int) -> None:
+    def _unregister(self, key: selectors.SelectorKey) -> None:
+        with contextlib.suppress(KeyError, ValueError):  # it may have unwatched itself
+            self._selector.unregister(key.fileobj)
+
+    @staticmethod
+    def _failed(on_error: ErrorHandler | None, exc: Exception) -> None:
+        """A watcher raised: tell its owner, or log it; never let it reach the loop."""
+        if on_error is None:
+            log.error("a socket's callback failed; it is no longer watched", exc_info=exc)
+            return
+        try:
+            on_error(exc)
+        except Exception:
+            log.exception("handling a socket callback's failure failed too")
+
+    def watch(
+        self,
+        sock: socket.socket,
+        callback: Watcher,
+        events: int,
+        on_error: ErrorHandler | None = None,
+    ) -> None:
         """Run ``callback(events)`` in the loop thread whenever ``sock`` is ready for ``events``
-        (``selectors.EVENT_READ`` / ``EVENT_WRITE``); calling again changes the events."""
+        (``selectors.EVENT_READ`` / ``EVENT_WRITE``); calling again changes the events. If the
+        callback raises, ``sock`` is no longer watched and ``on_error`` gets the exception."""
         with self._watch_lock:
             if self._closed:
                 raise BusClosed("the simulation has stopped")
             if sock.fileno() in self._selector.get_map():
-                self._selector.modify(sock, events, callback)
+                self._selector.modify(sock, events, (callback, on_error))
             else:
-                self._selector.register(sock, events, callback)
+                self._selector.register(sock, events, (callback, on_error))
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
+        """Run ``callback()`` in the loop thread after ``delay`` s (any thread may ask)."""
+        timer = Timer(time.monotonic() + delay, callback)
+        with self._lock:
+            if self._closed:
+                timer.cancel()
+                return timer
+            with self._timer_lock:
+                heapq.heappush(self._timers, (timer.when, next(self._timer_order), timer))
+            self._wake()
+        return timer
+
+    def _run_timers(self) -> None:
+        """Loop thread: run the timers that are due; one that raises is logged."""
+        now = time.monotonic()
+        while True:
+            with self._timer_lock:
+                if not self._timers or self._timers[0][0] > now:
+                    return
+                _, _, timer = heapq.heappop(self._timers)
+            if timer.cancelled or self._closed:
+                continue
+            try:
+                timer.callback()
+            except Exception:
+                log.exception("a timer in the simulation loop failed")
 
     def unwatch(self, sock: socket.socket) -> None:
         """Stop watching ``sock``; once this returns its callback is not running and won't run."""
@@ -141,6 +248,8 @@ class CommandBus:
         with self._watch_lock, self._lock:  # the order the loop takes them in (no deadlock)
             self._closed = True
             self._release()
+        with self._timer_lock:
+            self._timers.clear()
         while (request := self.get()) is not None:
             request.future.set_exception(BusClosed("the simulation has stopped"))
 

@@ -69,6 +69,7 @@ class Link:
             settings.port_rx if port_rx is None else port_rx,
             settings.port_tx if port_tx is None else port_tx,
             codec=codec,
+            timeout=settings.timeout,
         )
         self.serial: SerialServer | None = None
         try:
@@ -78,10 +79,11 @@ class Link:
                 stream_port,
                 width=settings.reply_bytes,
                 encoding=settings.str_encoding,
+                timeout=settings.timeout,
             )
             if serial or serial_link is not None:
                 self.serial = SerialServer(bus, serial_link, codec=codec, timeout=settings.timeout)
-        except OSError:
+        except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
             raise
 

@@ -6,6 +6,11 @@ Bluetooth port. With packed replies (SimMeR v1.0/v1.1, the Arduino examples) a c
 one per command, with no framing. With SimMeR v1.2's framed text a message ends at the frame's
 closing character, as the v1.2 Arduino example reads it; text outside frames is ignored and the
 reply is one frame (``[u0:15.45]``) with no line ending, so a program reads until ``]``.
+
+A failure answering one message (no reply within ``timeout``, a codec that raises) is logged
+and the port goes on serving; a program that does not read its replies holds only this port's
+thread, which :meth:`SerialServer.close` still stops. The stable link is made only where nothing
+is, and removed only while it is still the one made here.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import time
 import tty
 from pathlib import Path
 
+from simmer.errors import SimmerError
 from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import BusClosed, CommandBus
 
@@ -50,20 +56,45 @@ class SerialServer:
         self.timeout = timeout
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)  # no echo, no newline translation: replies are binary
+        os.set_blocking(self._master, False)
         self.path = os.ttyname(self._slave)
         self.link = Path(link) if link is not None else None
         self.client = f"serial {self.path}"
         self._wake_r, self._wake_w = os.pipe()
         self._stopping = threading.Event()
+        self._failures = 0
         self._thread = threading.Thread(target=self._loop, name="simmer-serial", daemon=True)
         if self.link is not None:
             try:
-                if self.link.is_symlink():
-                    self.link.unlink()
-                self.link.symlink_to(self.path)
-            except OSError:
+                self._make_link(self.link)
+            except BaseException:
                 self._close_fds()
                 raise
+
+    def _make_link(self, link: Path) -> None:
+        """Make ``link`` point at the port; refuse if anything is there already (the
+        simulator never replaces, nor later deletes, what it did not create)."""
+        try:
+            link.symlink_to(self.path)  # atomic: fails if the path exists, even dangling
+        except FileExistsError:
+            if link.is_symlink():
+                what = f"a link to {os.readlink(link)}"
+            else:
+                what = "a directory" if link.is_dir() else "a file"
+            raise SimmerError(
+                f"cannot make the serial link {link}: {what} is already there, and simmer does "
+                "not replace what it did not create. Remove it (a simmer that was killed may "
+                "have left it) or choose another path."
+            ) from None
+
+    def _owns_link(self) -> bool:
+        """Whether the link is still the one made here (not replaced meanwhile)."""
+        if self.link is None:
+            return False
+        try:
+            return os.readlink(self.link) == self.path
+        except OSError:
+            return False
 
     def start(self) -> None:
         """Start serving."""
@@ -85,7 +116,10 @@ class SerialServer:
                     self._answer(bytes(buffer))
                     buffer.clear()
                     continue
-                buffer += os.read(self._master, 65536)
+                try:
+                    buffer += os.read(self._master, 65536)
+                except BlockingIOError:
+                    continue
                 last = time.monotonic()
                 self._split(buffer)
                 if len(buffer) > MAX_MESSAGE_BYTES:
@@ -112,14 +146,43 @@ class SerialServer:
             buffer.clear()  # text outside frames (line endings, say) is ignored
 
     def _answer(self, data: bytes) -> None:
-        decoded = self.codec.decode(data)
-        if decoded.text is None and decoded.count == 0:
-            log.warning("%s: %s", self.client, decoded.error)
-            return
-        replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
-        reply = memoryview(self.codec.encode(decoded, replies))
+        """Answer one message; a failure is logged (the first in full) and serving goes on.
+        Only the port closing or the loop stopping ends the thread."""
+        try:
+            decoded = self.codec.decode(data)
+            if decoded.text is None and decoded.count == 0:
+                log.warning("%s: %s", self.client, decoded.error)
+                return
+            replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
+            self._write(self.codec.encode(decoded, replies))
+        except TimeoutError:
+            log.warning(
+                "%s: no reply within %g s; the message is dropped", self.client, self.timeout
+            )
+        except (BusClosed, OSError):
+            raise
+        except Exception as exc:
+            self._failures += 1
+            if self._failures == 1:
+                log.error(
+                    "%s: answering a message failed; the port goes on serving (more failures "
+                    "are counted, not logged): %s",
+                    self.client,
+                    exc,
+                    exc_info=exc,
+                )
+
+    def _write(self, data: bytes) -> None:
+        """Write all of ``data``, waiting while the pseudo-terminal is full (nobody reads);
+        give up if the server is closing."""
+        reply = memoryview(data)
         while reply:
-            reply = reply[os.write(self._master, reply) :]
+            try:
+                reply = reply[os.write(self._master, reply) :]
+            except BlockingIOError:
+                readable, _, _ = select.select([self._wake_r], [self._master], [])
+                if self._wake_r in readable:
+                    return
 
     def close(self) -> None:
         """Stop serving, remove the link and close the pseudo-terminal."""
@@ -130,7 +193,9 @@ class SerialServer:
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)
         self.bus.disconnect(self.client)
-        if self.link is not None and self.link.is_symlink():
+        if self._failures > 1:
+            log.error("%s: %d messages could not be answered", self.client, self._failures)
+        if self.link is not None and self._owns_link():
             self.link.unlink()
         self._close_fds()
 

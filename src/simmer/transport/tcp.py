@@ -4,27 +4,49 @@ No thread of their own: every socket (listening or connected) is non-blocking an
 loop thread through :meth:`CommandBus.watch`. The loop accepts, reads a message, executes it and
 sends the reply in one go, so a reply costs no thread hand-off (that is where a threaded server's
 latency goes), and an idle or slow client holds nothing up: it is just a socket nobody reads.
+
+What no client can do, however it behaves:
+
+* stop the loop: an exception while serving a connection is logged once, with the client, and
+  closes that connection only;
+* hold more than a bounded amount of memory: a persistent connection has at most
+  :data:`MAX_IN_FLIGHT` commands waiting for the loop and is not read while replies to it wait
+  to be sent (back-pressure), so what it queues is its last 64 KiB read plus the replies to
+  those commands; two-port replies nobody collects are held at most ``timeout`` s, and at most
+  :data:`MAX_UNCLAIMED` of them;
+* hold a descriptor for ever without talking: a connection that has not sent a complete message
+  (or, on ``port_tx``, has had no reply) within ``timeout`` s is closed;
+* spin the loop when descriptors run out: accepting pauses for :data:`ACCEPT_BACKOFF` s at a
+  time, said once, and resumes by itself.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import itertools
 import logging
+import math
 import selectors
 import socket
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
 
 from simmer.protocol import (
+    EXPLAIN,
+    MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
     Decoded,
     PackedCodec,
     ReplyCodec,
     decode_message,
     frame_replies,
+    frame_text,
 )
-from simmer.transport.bus import BusClosed, CommandBus
+from simmer.transport.bus import BusClosed, CommandBus, Request
 
 log = logging.getLogger("simmer.transport")
 
@@ -32,11 +54,30 @@ STREAM_PORT = 61202
 """Default port of the persistent stream protocol."""
 READ = selectors.EVENT_READ
 WRITE = selectors.EVENT_WRITE
+RECV_SIZE = 65536
+"""Bytes read from a socket at a time."""
+
+MAX_IN_FLIGHT = MAX_COMMANDS
+"""Commands a persistent connection may have waiting for the loop (sent, not yet answered);
+past it the connection is not read until replies go out. One message of the most commands
+always fits; the loop then spends at most ~15 ms on one connection before others get a turn."""
+MAX_UNCLAIMED = 256
+"""Two-port replies held for reply connections that have not come yet; the oldest is dropped
+past it. A lab runs a handful of clients, each with one message out at a time; 256 uncollected
+messages are at most 16 MiB even if each is 64 KiB."""
+ACCEPT_BACKOFF = 0.5
+"""Seconds a listener is not watched after accepting failed for lack of descriptors (or
+anything unexpected): retrying at once would spin the loop, and the connections already open are
+served meanwhile; half a second is short beside a client's connect timeout."""
+_OUT_OF_RESOURCES = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
 
 
 class _Connection:
     """One accepted, non-blocking connection driven by the loop thread, with an outbox for
-    what the socket cannot take at once (meanwhile it is not read: back-pressure)."""
+    what the socket cannot take at once (meanwhile it is not read: back-pressure).
+
+    ``deadline`` (monotonic) is when the idle sweep closes it; None: never (it is not waiting
+    for the client, or the client is between messages)."""
 
     def __init__(self, server: _Server, conn: socket.socket, client: str) -> None:
         conn.setblocking(False)
@@ -46,7 +87,16 @@ class _Connection:
         self.outbox = bytearray()
         self.close_when_sent = False
         self.closed = False
-        self.events = READ
+        self.events = 0
+        self.order = next(server.order)
+        """Accept order across the server's listeners (the two-port scheme pairs by it)."""
+        self.deadline: float | None = time.monotonic() + server.timeout
+
+    def start(self) -> None:
+        """Watch the connection, then let the subclass start its work."""
+        self.update_events()
+        if not self.closed:
+            self.opened()
 
     def on_ready(self, events: int) -> bool:
         """Loop thread: flush, or read what arrived; False once closed."""
@@ -54,7 +104,7 @@ class _Connection:
             self.flush()
             return not self.closed
         try:
-            chunk = self.conn.recv(65536)
+            chunk = self.conn.recv(RECV_SIZE)
         except BlockingIOError:
             return True
         except OSError:
@@ -69,6 +119,13 @@ class _Connection:
         """Handle received bytes (``b""``: the client closed its end)."""
         raise NotImplementedError
 
+    def reading(self) -> bool:
+        """Whether to read more from the client now (subclasses may hold back)."""
+        return True
+
+    def drained(self) -> None:
+        """Everything queued has been sent (subclasses may take more input now)."""
+
     def send(self, data: bytes) -> None:
         """Queue bytes and send what the socket takes now."""
         self.outbox += data
@@ -78,45 +135,82 @@ class _Connection:
         """Send what the socket takes; watch for writability while anything is left."""
         if self.closed:
             return
-        try:
-            sent = self.conn.send(self.outbox) if self.outbox else 0
-        except BlockingIOError:
-            sent = 0
-        except OSError:  # the client has gone
-            self.close()
-            return
-        del self.outbox[:sent]
-        if not self.outbox and self.close_when_sent:
-            self.close()
-            return
-        events = WRITE if self.outbox else READ
-        if events != self.events:
-            self.events = events
+        if self.outbox:
             try:
-                self.server.bus.watch(self.conn, self.on_ready, events)
-            except BusClosed:
+                sent = self.conn.send(self.outbox)
+            except BlockingIOError:
+                sent = 0
+            except OSError:  # the client has gone
                 self.close()
+                return
+            del self.outbox[:sent]
+        if not self.outbox:
+            if self.close_when_sent:
+                self.close()
+                return
+            self.drained()
+        self.update_events()
+
+    def update_events(self) -> None:
+        """Watch for what the connection needs now: writability while replies wait to be sent
+        (nothing is read meanwhile), readability while it takes input, else nothing."""
+        if self.closed:
+            return
+        events = WRITE if self.outbox else (READ if self.reading() else 0)
+        if events == self.events:
+            return
+        self.events = events
+        try:
+            if events:
+                self.server.bus.watch(self.conn, self.on_ready, events, self.failed)
+            else:
+                self.server.bus.unwatch(self.conn)
+        except BusClosed:
+            self.close()
+
+    def guard(self, action: Callable[[], None]) -> None:
+        """Run ``action`` for this connection (a reply being ready, say): if it raises, the
+        connection is closed, not the loop."""
+        try:
+            action()
+        except Exception as exc:
+            self.failed(exc)
+
+    def failed(self, exc: Exception) -> None:
+        """Serving this connection raised: log it once, with the client, and close it."""
+        if self.closed:
+            return
+        log.error("%s: internal error, closing the connection: %s", self.client, exc, exc_info=exc)
+        self.close()
 
     def close(self) -> None:
         """Stop watching and close the socket (any thread)."""
         if self.closed:
             return
         self.closed = True
+        self.deadline = None
         self.server.bus.unwatch(self.conn)
         self.conn.close()
         self.server.forget(self)
 
 
 class _Server:
-    """Listening sockets watched by the loop; tracks connections so :meth:`close` is clean."""
+    """Listening sockets watched by the loop; tracks connections so :meth:`close` is clean,
+    closes idle ones (see :class:`_Connection`) and backs off when accepting fails."""
 
     kind = "tcp"
 
-    def __init__(self, bus: CommandBus, host: str, ports: list[int]) -> None:
+    def __init__(
+        self, bus: CommandBus, host: str, ports: list[int], timeout: float = 300.0
+    ) -> None:
         self.bus = bus
+        self.timeout = timeout
+        self.order = itertools.count()
         self._lock = threading.Lock()
         self._connections: set[_Connection] = set()
         self._listeners: list[socket.socket] = []
+        self._paused: set[int] = set()
+        self._accept_failing = False
         self._closed = False
         try:
             for port in ports:
@@ -130,31 +224,109 @@ class _Server:
 
     def start(self) -> None:
         """Start accepting connections (the loop must be running to serve them)."""
-        for index, listener in enumerate(self._listeners):
-            self.bus.watch(listener, self._acceptor(index), READ)
+        for index in range(len(self._listeners)):
+            self._watch_listener(index)
+        self.bus.call_later(self._sweep_interval(), self._sweep)
 
-    def _acceptor(self, index: int) -> Callable[[int], bool]:
-        return lambda _events: self._accept(index)
+    def _watch_listener(self, index: int) -> None:
+        """Accept on listener ``index`` when it is readable; back off if that raises."""
+        self.bus.watch(
+            self._listeners[index],
+            lambda _events: self._accept(index),
+            READ,
+            lambda exc: self._pause(index, exc),
+        )
 
     def _accept(self, index: int) -> bool:
+        """Loop thread: listener ``index`` is readable."""
+        self.accept_one(index)
+        return True
+
+    def accept_one(self, index: int) -> bool:
+        """Accept one connection on listener ``index`` if one waits; True if one was."""
         try:
             conn, addr = self._listeners[index].accept()
         except BlockingIOError:
-            return True
+            return False
         except OSError as exc:
-            log.warning("%s: accept failed: %s", self.kind, exc)
+            if exc.errno in _OUT_OF_RESOURCES:
+                self._pause(index, exc)
+            else:  # e.g. the client gave up before we got to it
+                log.debug("%s: accept failed: %s", self.kind, exc)
+            return False
+        if self._accept_failing:
+            self._accept_failing = False
+            log.warning("%s: accepting connections again", self.kind)
+        try:
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            connection = self.connection(conn, f"{addr[0]}:{addr[1]}", index)
+        except OSError as exc:  # reset before we got to it
+            log.debug("%s: dropped a connection at once: %s", self.kind, exc)
+            conn.close()
             return True
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        connection = self.connection(conn, f"{addr[0]}:{addr[1]}", index)
         with self._lock:
             self._connections.add(connection)
-        try:
-            self.bus.watch(conn, connection.on_ready, READ)
-        except BusClosed:
-            connection.close()
-            return False
-        connection.opened()
+        connection.guard(connection.start)
         return True
+
+    def _pause(self, index: int, exc: Exception) -> None:
+        """Stop watching listener ``index`` for :data:`ACCEPT_BACKOFF` s (out of descriptors,
+        or accepting raised): said once until accepting works again."""
+        if index in self._paused or self._closed:
+            return
+        self._paused.add(index)
+        self.bus.unwatch(self._listeners[index])
+        if not self._accept_failing:
+            self._accept_failing = True
+            log.error(
+                "%s: cannot accept connections (%s); retrying every %g s, said once; open "
+                "connections are still served",
+                self.kind,
+                exc,
+                ACCEPT_BACKOFF,
+                exc_info=None if isinstance(exc, OSError) else exc,
+            )
+        self.bus.call_later(ACCEPT_BACKOFF, lambda: self._resume(index))
+
+    def _resume(self, index: int) -> None:
+        """The back-off is over: watch listener ``index`` again."""
+        if self._closed:
+            return
+        self._paused.discard(index)
+        with contextlib.suppress(BusClosed):
+            self._watch_listener(index)
+
+    def _sweep_interval(self) -> float:
+        """Seconds between idle sweeps: a quarter of the timeout, within 0.05 s and 1 s."""
+        return min(1.0, max(0.05, self.timeout / 4))
+
+    def _sweep(self) -> None:
+        """Loop thread, every second or so: close connections past their deadline."""
+        if self._closed:
+            return
+        try:
+            now = time.monotonic()
+            with self._lock:
+                late = [
+                    c for c in self._connections if c.deadline is not None and c.deadline <= now
+                ]
+            for connection in late:
+                connection.close()
+            if late:
+                log.info(
+                    "%s: closed %d connection(s) idle for %g s with no complete message "
+                    "(or no reply to collect): %s",
+                    self.kind,
+                    len(late),
+                    self.timeout,
+                    ", ".join(c.client for c in late[:3]) + (", ..." if len(late) > 3 else ""),
+                )
+            self.swept(now)
+        finally:
+            self.bus.call_later(self._sweep_interval(), self._sweep)
+
+    def swept(self, now: float) -> None:
+        """After each idle sweep (subclasses expire what they hold)."""
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """The handler of a connection accepted on listener ``index`` (subclasses)."""
@@ -169,7 +341,7 @@ class _Server:
         """Stop accepting and close every connection."""
         if self._closed:
             return
-        self._closed = True
+        self._closed = True  # its timers see it and stop
         for listener in self._listeners:
             self.bus.unwatch(listener)
             listener.close()
@@ -187,24 +359,40 @@ class _Server:
 
 
 class _Pending:
-    """A two-port message waiting for its reply connection: what was asked, and its replies."""
+    """A two-port message waiting for its reply connection: what was asked, its replies, the
+    accept order of its connection and when it arrived."""
 
-    __slots__ = ("decoded", "future")
+    __slots__ = ("arrived", "decoded", "future", "order")
 
-    def __init__(self, decoded: Decoded, future: Future[list[float]]) -> None:
+    def __init__(self, decoded: Decoded, future: Future[list[float]], order: int) -> None:
         self.decoded = decoded
         self.future = future
+        self.order = order
+        self.arrived = time.monotonic()
 
 
 class TwoPortServer(_Server):
     """SimMeR's scheme: a message arrives on ``port_rx`` (everything until the client closes);
-    its reply leaves on the next connection to ``port_tx`` once it is ready, then that
-    connection is closed. Replies go out in the order messages arrived; a reply connection that
-    hangs up before its reply is sent does not consume it, so no reply is lost or doubled.
+    its reply leaves on a connection to ``port_tx`` once it is ready, then that connection is
+    closed. ``codec`` decides the bytes both ways: packed floats (SimMeR v1.0/v1.1) or SimMeR
+    v1.2's framed text, whose message with no complete frame gets its reply connection closed
+    with nothing sent, as the original did.
 
-    ``codec`` decides the bytes both ways: packed floats (SimMeR v1.0/v1.1) or SimMeR v1.2's
-    framed text, whose message with no complete frame gets its reply connection closed with
-    nothing sent, as the original did."""
+    Nothing in the scheme says which reply is whose: replies are paired with reply connections
+    by order, oldest with oldest. Two rules keep a stray connection from putting that out of
+    step for good:
+
+    * a reply connection claims only replies to messages whose connection was accepted before
+      it (every waiting ``port_rx`` connection is accepted first, so a client's own message
+      always counts). A connection to ``port_tx`` already open when a message's connection
+      comes, idle or stray, therefore never takes that message's reply; it is closed after
+      ``timeout`` s;
+    * a reply nobody collects is dropped after ``timeout`` s, and past :data:`MAX_UNCLAIMED`
+      the oldest goes, so memory stays bounded.
+
+    A reply connection that hangs up before its reply is sent does not consume it: the next one
+    gets it. What no rule can fix: a client killed after sending leaves a reply that the next
+    client's reply connection takes (until it expires), as in the original."""
 
     kind = "two-port"
 
@@ -216,12 +404,14 @@ class TwoPortServer(_Server):
         port_tx: int = 61201,
         *,
         codec: ReplyCodec | None = None,
+        timeout: float = 300.0,
     ) -> None:
-        super().__init__(bus, host, [port_rx, port_tx])
+        super().__init__(bus, host, [port_rx, port_tx], timeout)
         self.port_rx, self.port_tx = self.ports
         self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
         self.unclaimed: deque[_Pending] = deque()  # replies nobody has asked for yet
         self.waiting: deque[_ReplyConnection] = deque()  # reply connections with no reply yet
+        self.dropped = 0  # replies dropped since the last sweep (logged there)
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A message connection (port_rx) or a reply connection (port_tx)."""
@@ -229,10 +419,52 @@ class TwoPortServer(_Server):
             return _MessageConnection(self, conn, f"two-port {peer}")
         return _ReplyConnection(self, conn, f"two-port {peer}")
 
+    def _accept(self, index: int) -> bool:
+        """A reply connection is accepted only after every message connection waiting, so
+        that a client's message always comes before its reply connection in accept order."""
+        if index == 1:
+            while self.accept_one(0):
+                pass
+        return super()._accept(index)
+
+    def arrived(self, decoded: Decoded, order: int, client: str) -> None:
+        """Loop thread: a whole message came in; execute it and hold its reply."""
+        future = self.bus.submit(decoded, client)
+        self.unclaimed.append(_Pending(decoded, future, order))
+        while len(self.unclaimed) > MAX_UNCLAIMED:
+            self.unclaimed.popleft()
+            self.dropped += 1
+        self.match()
+
     def match(self) -> None:
-        """Loop thread: give the oldest unclaimed replies to the oldest waiting connections."""
-        while self.unclaimed and self.waiting:
-            self.waiting.popleft().claim(self.unclaimed.popleft())
+        """Loop thread: give each waiting reply connection, oldest first, the oldest unclaimed
+        reply to a message accepted before it."""
+        first = min((p.order for p in self.unclaimed), default=None)
+        for waiting in list(self.waiting):
+            if first is None:
+                return
+            if waiting.order < first or waiting.closed or waiting not in self.waiting:
+                continue  # opened before any of these messages (see the class doc), or gone
+            reply = next(p for p in self.unclaimed if p.order < waiting.order)
+            self.unclaimed.remove(reply)
+            self.waiting.remove(waiting)
+            waiting.claim(reply)
+            first = min((p.order for p in self.unclaimed), default=None)
+
+    def swept(self, now: float) -> None:
+        """Drop replies older than ``timeout``; log what was dropped since the last sweep."""
+        kept = deque(p for p in self.unclaimed if now - p.arrived < self.timeout)
+        dropped = self.dropped + len(self.unclaimed) - len(kept)
+        self.unclaimed, self.dropped = kept, 0
+        if dropped:
+            log.warning(
+                "two-port: dropped %d repl%s nobody collected (kept %g s, at most %d); replies "
+                "pair with reply connections by order only",
+                dropped,
+                "y" if dropped == 1 else "ies",
+                self.timeout,
+                MAX_UNCLAIMED,
+            )
 
 
 class _MessageConnection(_Connection):
@@ -253,9 +485,7 @@ class _MessageConnection(_Connection):
             log.debug("%s connected and sent nothing: no message", self.client)
             return
         decoded = self.two_port.codec.decode(bytes(self.data))
-        future = self.server.bus.submit(decoded, self.client)
-        self.two_port.unclaimed.append(_Pending(decoded, future))
-        self.two_port.match()
+        self.two_port.arrived(decoded, self.order, self.client)
 
 
 class _ReplyConnection(_Connection):
@@ -274,7 +504,7 @@ class _ReplyConnection(_Connection):
     def claim(self, reply: _Pending) -> None:
         """This connection will carry ``reply`` once it is ready."""
         self.reply = reply
-        reply.future.add_done_callback(lambda _future: self.ready(reply))
+        reply.future.add_done_callback(lambda _future: self.guard(lambda: self.ready(reply)))
 
     def ready(self, reply: _Pending) -> None:
         """The reply exists (loop thread): send it and close."""
@@ -308,7 +538,8 @@ class _ReplyConnection(_Connection):
 
 class StreamServer(_Server):
     """The persistent protocol: many ``\\n``-terminated messages on one connection, each
-    answered in order with a frame (width byte, uint16 count, packed values)."""
+    answered in order with a frame (width byte, uint16 count, packed values); a ``?`` line is
+    answered with a text frame giving why the last message's NaN replies are NaN."""
 
     kind = "stream"
 
@@ -320,8 +551,9 @@ class StreamServer(_Server):
         *,
         width: int = 4,
         encoding: str = "utf-8",
+        timeout: float = 300.0,
     ) -> None:
-        super().__init__(bus, host, [port])
+        super().__init__(bus, host, [port], timeout)
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -339,48 +571,121 @@ class StreamServer(_Server):
 
 
 class _StreamConnection(_Connection):
-    """One persistent-protocol connection: lines in, frames out, in order."""
+    """One persistent-protocol connection: lines in, frames out, in order.
+
+    Lines are taken from the inbox only while fewer than :data:`MAX_IN_FLIGHT` commands wait
+    for the loop and no reply waits to be sent; otherwise the socket is not read either, so a
+    client that never reads its replies holds a bounded amount and delays nobody."""
 
     def __init__(self, server: StreamServer, conn: socket.socket, client: str) -> None:
         super().__init__(server, conn, client)
         self.stream = server
         self.inbox = bytearray()
         self.searched = 0
-        self.ended = False  # an overlong line: no more input; close after its reply
+        self.ended = False  # a message over a limit: no more input; close after its reply
         self.last: Future[list[float]] | None = None
+        self.latest: Future[list[float]] | None = None  # the last message submitted
+        self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
+        self.messages = 0
+        self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
+
+    def reading(self) -> bool:
+        """Read while the connection may have more in flight."""
+        return not self.ended and self.in_flight < MAX_IN_FLIGHT
 
     def received(self, chunk: bytes) -> None:
-        """Submit every complete line; an overlong line gets a NaN and ends the connection."""
+        """Take in what arrived (end of stream: the client left)."""
         if not chunk:
             self.close()
             return
         if self.ended:
             return
+        self.inbox += chunk
+        self.pump()
+
+    def drained(self) -> None:
+        """Every reply is sent: take the next lines."""
+        self.pump()
+
+    def pump(self) -> None:
+        """Submit complete lines while allowed (see the class doc); a line over the size
+        limit gets one NaN and ends the connection."""
         inbox = self.inbox
-        inbox += chunk
-        while (end := inbox.find(b"\n", self.searched)) >= 0:
-            self.submit(decode_message(bytes(inbox[:end]), self.stream.encoding))
+        while not (self.closed or self.ended or self.outbox) and self.in_flight < MAX_IN_FLIGHT:
+            end = inbox.find(b"\n", self.searched)
+            if end < 0:
+                self.searched = len(inbox)
+                if len(inbox) > MAX_MESSAGE_BYTES:
+                    reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
+                    self.submit(Decoded(None, 1, reason, over_limit=True))
+                    inbox.clear()
+                break
+            line = bytes(inbox[:end])
             del inbox[: end + 1]
             self.searched = 0
-        self.searched = len(inbox)
-        if len(inbox) > MAX_MESSAGE_BYTES:
-            reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-            self.ended = True
-            self.last = self.submit(Decoded(None, 1, reason))
-            inbox.clear()
+            self.messages += 1
+            if line.rstrip(b"\r") == EXPLAIN:
+                self.explain_later()
+            else:
+                self.submit(decode_message(line, self.stream.encoding))
+        self.rearm()
+        self.update_events()
 
-    def submit(self, decoded: Decoded) -> Future[list[float]]:
-        """Queue one message; its frame is sent as soon as the loop has answered it."""
-        future = self.server.bus.submit(decoded, self.client)
-        future.add_done_callback(self.reply)
-        return future
-
-    def reply(self, future: Future[list[float]]) -> None:
-        """Loop thread (or a closing bus): send the reply frame; futures complete in order."""
+    def rearm(self) -> None:
+        """Set the idle deadline while the client owes a message: before its first one, or
+        with part of a line received; not between messages or while it waits for us."""
         if self.closed:
             return
+        owed = (not self.messages or self.inbox) and not (
+            self.ended or self.in_flight or self.outbox
+        )
+        if not owed:
+            self.deadline = None
+        elif self.deadline is None:
+            self.deadline = time.monotonic() + self.server.timeout
+
+    def submit(self, decoded: Decoded) -> None:
+        """Queue one message; its frame is sent as soon as the loop has answered it."""
+        if decoded.over_limit:
+            self.ended = True
+        self.in_flight += decoded.count
+        request = self.server.bus.request(decoded, self.client)
+        self.latest = request.future
+        if self.ended:
+            self.last = request.future
+        request.future.add_done_callback(lambda _future: self.guard(lambda: self.reply(request)))
+
+    def reply(self, request: Request) -> None:
+        """Loop thread (or a closing bus): send the reply frame; futures complete in order.
+        A frame is checked before it goes: more values than a message may have (none should)
+        become one NaN and the end of the connection."""
+        self.in_flight -= request.decoded.count
+        if self.closed:
+            return
+        future = request.future
         if future.exception() is not None:
             self.close()
             return
+        values = future.result()
+        if len(values) > MAX_COMMANDS:
+            log.error(
+                "%s: %d replies to one message; sending NaN, closing", self.client, len(values)
+            )
+            values, self.ended, self.last = [math.nan], True, future
+        self.reasons = request.reasons
         self.close_when_sent = future is self.last
-        self.send(frame_replies(future.result(), self.stream.width))
+        self.send(frame_replies(values, self.stream.width))
+
+    def explain_later(self) -> None:
+        """Answer ``?`` once the message before it is answered (frames go out in order)."""
+        self.in_flight += 1
+        if self.latest is None:
+            self.explain()
+        else:
+            self.latest.add_done_callback(lambda _future: self.guard(self.explain))
+
+    def explain(self) -> None:
+        """Send the reasons of the last answered message as a text frame."""
+        self.in_flight -= 1
+        if not self.closed:
+            self.send(frame_text("\n".join(self.reasons)))
