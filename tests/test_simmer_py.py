@@ -327,7 +327,7 @@ def test_toml_simmer_device_needs_file_and_class(tmp_path: Path) -> None:
     text = str(error_of(toml))
     assert "sensors.t0.module: missing" in text
     assert "sensors.t0.class_name: missing" in text
-    assert "sensors.t1.class_name: Value error, beacon.py has no class 'Becon'" in text
+    assert "sensors.t1.class_name: beacon.py has no class 'Becon'" in text
 
 
 def test_misspelt_setting_is_reported(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:

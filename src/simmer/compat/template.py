@@ -145,7 +145,7 @@ class SimmerDeviceParams(DeviceParams):
         path = Path(module_path)
         try:
             module = load_module(path).module
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # sys.exit() in the file must not end `check`
             raise ValueError(f"importing {path.name} failed: {describe_exception(exc)}") from None
         if not hasattr(module, value):
             classes = [n for n, o in vars(module).items() if inspect.isclass(o)]

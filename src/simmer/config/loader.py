@@ -15,9 +15,13 @@ from __future__ import annotations
 import difflib
 import importlib
 import importlib.util
+import math
+import reprlib
 import sys
 import tomllib
 import traceback
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cache
 from importlib.resources import files
@@ -26,8 +30,19 @@ from typing import TYPE_CHECKING, Any, get_args
 
 import numpy as np
 from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
 
-from simmer.config.models import DEVICE_GROUPS, DeviceSpec, Group, Settings, SimConfig
+from simmer.config.models import (
+    DEVICE_GROUPS,
+    MAX_CELLS_PER_SIDE,
+    MAX_DRAWING_PIXELS,
+    MAX_FLOOR_TILES,
+    DeviceSpec,
+    Group,
+    Settings,
+    SimConfig,
+)
+from simmer.config.toml_errors import toml_issue
 from simmer.devices import device_kinds, get_device_kind
 from simmer.errors import ConfigError, ConfigIssue, DeviceKindError
 from simmer.geometry import (
@@ -47,10 +62,18 @@ GROUP_OF_CATEGORY: dict[str, Group] = {"motor": "motors", "drive": "drives", "se
 BUILTIN_SOURCE = "<built-in default>"
 ORIGINAL_RUNS = "; the original SimMeR ran this, so SimMeR 2 does too (a TOML file may not)"
 """Ends a warning about what an original config.py may do but a native file may not."""
+MAX_FILE_BYTES = 1_000_000
+"""Largest configuration file read: the lab's are 3 kB, and the walls of the largest maze
+allowed (200 x 200 cells) take 120 kB; a larger file is the wrong file, and reading it would
+take minutes and gigabytes."""
 
 
 def load_config(path: str | Path | None = None) -> SimConfig:
-    """Load a configuration file (TOML or SimMeR ``config.py``); None gives the built-in default."""
+    """Load a configuration file (TOML or SimMeR ``config.py``); None gives the built-in default.
+
+    Whatever is wrong with the file is a :class:`ConfigError` naming it, so ``simmer check``
+    and ``simmer run`` can say so in one line.
+    """
     if path is None:
         return default_config()
     path = Path(path)
@@ -58,12 +81,44 @@ def load_config(path: str | Path | None = None) -> SimConfig:
         raise ConfigError(
             path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
         )
-    if path.suffix == ".py":
-        from simmer.config.simmer_py import load_simmer_py
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise ConfigError(
+            path,
+            [
+                ConfigIssue(
+                    "",
+                    f"is {size:,} bytes, more than any configuration ({MAX_FILE_BYTES:,} at "
+                    "most: even a 200 x 200 maze takes 120,000); is this the right file?",
+                )
+            ],
+        )
+    with _unreadable_as_config_error(path):
+        if path.suffix == ".py":
+            from simmer.config.simmer_py import load_simmer_py
 
-        loaded: SimConfig = load_simmer_py(path)
-        return loaded
-    return config_from_toml(path.read_text(encoding="utf-8"), str(path), path.parent)
+            loaded: SimConfig = load_simmer_py(path)
+            return loaded
+        text = path.read_text(encoding="utf-8")
+        return config_from_toml(text, str(path), path.parent)
+
+
+@contextmanager
+def _unreadable_as_config_error(path: Path) -> Iterator[None]:
+    """Turn what a file can make Python raise, beyond the problems validation reports, into a
+    :class:`ConfigError`: unreadable bytes, lists nested deeper than Python follows (in a
+    config.py), or more data than memory holds."""
+    try:
+        yield
+    except (OSError, UnicodeDecodeError) as exc:
+        message = f"cannot read the file: {exc}; save it as UTF-8 text"
+        raise ConfigError(path, [ConfigIssue("", message)]) from None
+    except RecursionError:
+        message = "lists or tables are nested too deeply to read; no setting nests more than 3"
+        raise ConfigError(path, [ConfigIssue("", message)]) from None
+    except MemoryError:
+        message = "holds more data than fits in memory; no configuration needs that much"
+        raise ConfigError(path, [ConfigIssue("", message)]) from None
 
 
 @cache
@@ -74,26 +129,19 @@ def default_config() -> SimConfig:
 
 
 def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
-    """Parse TOML text and validate it (see :func:`config_from_dict`)."""
+    """Parse TOML text and validate it (see :func:`config_from_dict`).
+
+    A file that is not TOML gets one issue in plain words, with its line (a key or table
+    written twice names both lines: :mod:`simmer.config.toml_errors`).
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        line = _toml_error_line(str(exc))
-        raise ConfigError(
-            source,
-            [ConfigIssue("", f"not valid TOML: {exc}; check quotes, commas and brackets", line)],
-        ) from None
+        raise ConfigError(source, [toml_issue(exc, text)]) from None
+    except RecursionError:
+        message = "lists or tables are nested too deeply to read; no setting nests more than 3"
+        raise ConfigError(source, [ConfigIssue("", f"not valid TOML: {message}")]) from None
     return config_from_dict(data, source, base_dir)
-
-
-def _toml_error_line(message: str) -> int | None:
-    marker = "(at line "
-    if marker in message:
-        tail = message.split(marker, 1)[1]
-        digits = tail.split(",", 1)[0]
-        if digits.isdigit():
-            return int(digits)
-    return None
 
 
 def config_from_dict(
@@ -109,6 +157,10 @@ def config_from_dict(
     issues = found.errors
     groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
     issues += _load_plugins(data.get("plugins", []), base_dir)
+    oversize = oversize_walls(data.get("walls"))
+    if oversize is not None:
+        issues.append(oversize)
+        del data["walls"]  # validate the rest without copying the matrix
 
     settings: Settings | None = None
     try:
@@ -123,9 +175,9 @@ def config_from_dict(
     devices = _validate_devices(groups, declared, found, base_dir)
     issues += _check_drive_motors(devices, declared["motors"])
     if settings is not None:
-        issues += _check_walls(settings)
-        issues += _check_references(settings, declared)
-        if not any(issue.key.startswith(("walls", "robot_", "block_")) for issue in issues):
+        maze_issues = [] if oversize else _check_walls(settings) or _check_sizes(settings)
+        issues += maze_issues + _check_references(settings, declared)
+        if not (oversize or maze_issues):  # the placement check builds the maze
             _check_placement(settings, found)
     if issues:
         raise ConfigError(source, issues)
@@ -171,7 +223,7 @@ def _load_plugins(plugins: Any, base_dir: Path) -> list[ConfigIssue]:
                     "give a path relative to the configuration file",
                 )
             )
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # sys.exit() in a plug-in must not end `check`
             issues.append(ConfigIssue(f"plugins[{i}]", _describe_plugin_error(entry, exc)))
     return issues
 
@@ -198,7 +250,7 @@ def _import_plugin(entry: str, base_dir: Path) -> None:
         importlib.import_module(entry)
 
 
-def _describe_plugin_error(entry: str, exc: Exception) -> str:
+def _describe_plugin_error(entry: str, exc: Exception | SystemExit) -> str:
     if isinstance(exc, DeviceKindError):
         return f"{entry}: {exc}"
     frames = traceback.extract_tb(exc.__traceback__)
@@ -207,7 +259,10 @@ def _describe_plugin_error(entry: str, exc: Exception) -> str:
         if Path(frame.filename).name == Path(entry).name:
             where = f" at line {frame.lineno}"
             break
-    return f"importing {entry} failed{where}: {type(exc).__name__}: {exc}"
+    what = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+    if isinstance(exc, SystemExit):
+        what += "; a plug-in may not end the program: remove its sys.exit() or exit() call"
+    return f"importing {entry} failed{where}: {what}"
 
 
 # ----------------------------------------------------------------------------- devices
@@ -224,14 +279,13 @@ def _validate_devices(
     for group in DEVICE_GROUPS:
         table = groups[group]
         if not isinstance(table, dict):
-            issues.append(
-                ConfigIssue(group, f"must be a table of devices like [{group}.xx], not {table!r}")
-            )
+            message = f"must be a table of devices like [{group}.xx], not {_shown(table)}"
+            issues.append(ConfigIssue(group, message))
             continue
         for device_id, raw in table.items():
             key = f"{group}.{device_id}"
             if not isinstance(raw, dict):
-                issues.append(ConfigIssue(key, f"must be a table of settings, not {raw!r}"))
+                issues.append(ConfigIssue(key, f"must be a table of settings, not {_shown(raw)}"))
                 continue
             home = _rehome(group, device_id, raw, declared, found) if found.original else group
             if home is None:
@@ -327,13 +381,14 @@ def _validate_device(
             )
         )
         return None
-    kind = get_device_kind(str(kind_name))
+    named = isinstance(kind_name, str)
+    kind = get_device_kind(kind_name) if named else None
     if kind is None:
-        hint = _did_you_mean(str(kind_name), list(device_kinds()))
+        hint = _did_you_mean(kind_name, list(device_kinds())) if named else ""
         issues.append(
             ConfigIssue(
                 f"{key}.type",
-                f"unknown device kind {kind_name!r}{hint}; known kinds: "
+                f"unknown device kind {_shown(kind_name)}{hint}; known kinds: "
                 + _kind_list(CATEGORY_OF_GROUP[group]),
             )
         )
@@ -390,6 +445,78 @@ def _check_walls(settings: Settings) -> list[ConfigIssue]:
             )
     if not any(cell != 0 for row in walls for cell in row):
         issues.append(ConfigIssue("walls", "has no open cell (0 means solid); use 1 for floor"))
+    return issues
+
+
+def oversize_walls(walls: Any) -> ConfigIssue | None:
+    """A ``walls`` matrix over the size limit, found on the raw data before validation copies
+    it (a 10,000 x 10,000 matrix took minutes and gigabytes to refuse)."""
+    if not isinstance(walls, list | tuple):
+        return None  # the Settings model reports the wrong type
+    why = (
+        f"at most {MAX_CELLS_PER_SIDE} rows of {MAX_CELLS_PER_SIDE} cells (the lab maze has 4 "
+        "rows of 8), because every wall is stored and drawn, and a reading walks the maze cell "
+        "by cell"
+    )
+    if len(walls) > MAX_CELLS_PER_SIDE:
+        return ConfigIssue("walls", f"has {len(walls):,} rows; {why}")
+    for r, row in enumerate(walls):
+        if isinstance(row, list | tuple) and len(row) > MAX_CELLS_PER_SIDE:
+            return ConfigIssue(f"walls[{r}]", f"has {len(row):,} cells; {why}")
+    return None
+
+
+def _check_sizes(settings: Settings) -> list[ConfigIssue]:
+    """Refuse a floor or a drawing too large to hold, before the maze is built: floor tiles of
+    1e-6 in asked for 32 PiB, a ``ppi`` of 1e300 for a window no screen can show."""
+    from simmer.world.maze import floor_tiles
+
+    s = settings
+    rows, cols = len(s.walls), len(s.walls[0])
+    width, height = cols * s.wall_segment_length, rows * s.wall_segment_length
+    maze = f"the {_number(width)} x {_number(height)} in maze ({cols} x {rows} cells)"
+    if not math.isfinite(width * height):
+        return [
+            ConfigIssue(
+                "wall_segment_length",
+                f"makes {maze} too large to compute with; the lab maze's cells are 12 in",
+            )
+        ]
+    issues = []
+    across, down = floor_tiles(cols, rows, s.wall_segment_length, s.floor_segment_length)
+    if not across * down <= MAX_FLOOR_TILES:
+        smallest = math.sqrt(width * height / MAX_FLOOR_TILES)
+        issues.append(
+            ConfigIssue(
+                "floor_segment_length",
+                f"{maze} makes {_number(across * down)} floor tiles of "
+                f"{_number(s.floor_segment_length)} in; at most {MAX_FLOOR_TILES:,} (the lab "
+                "maze has 512), because the floor pattern is held as one array: make "
+                f"floor_segment_length at least about {_rounded(smallest, up=True)} in, or "
+                "the maze smaller (wall_segment_length, walls)",
+            )
+        )
+    border = 2 * s.border_pixels
+    side = max(width, height) * s.ppi + border
+    if not side <= MAX_DRAWING_PIXELS:
+        limit = f"at most {MAX_DRAWING_PIXELS:,} pixels a side (the most graphics cards draw)"
+        if border >= MAX_DRAWING_PIXELS:
+            issues.append(
+                ConfigIssue(
+                    "border_pixels",
+                    f"leaves no room for the maze in a window of {limit}; the lab uses 20",
+                )
+            )
+        else:
+            fits = (MAX_DRAWING_PIXELS - border) / max(width, height)
+            issues.append(
+                ConfigIssue(
+                    "ppi",
+                    f"draws {maze} {_number(width * s.ppi + border)} x "
+                    f"{_number(height * s.ppi + border)} pixels (with the border); {limit}: "
+                    f"make ppi at most {_rounded(fits, up=False)}, or the maze smaller",
+                )
+            )
     return issues
 
 
@@ -451,11 +578,12 @@ def _check_placement(settings: Settings, found: _Found) -> None:
         found.errors.append(
             ConfigIssue(
                 "robot_start_position",
-                f"the robot at {list(settings.robot_start_position)} overlaps a wall, a solid "
-                f"cell or the maze edge; put it in an open cell, e.g. {maze.open_cell_centre()}",
+                f"the robot at {_point(settings.robot_start_position)} overlaps a wall, a solid "
+                "cell or the maze edge; put it in an open cell, e.g. "
+                f"{_point(maze.open_cell_centre())}",
             )
         )
-    where = f"the block at {list(settings.block_position)}"
+    where = f"the block at {_point(settings.block_position)}"
     if polygon_hits_grid(block.polygon, maze.hwall, maze.vwall, maze.solid, maze.cell):
         hidden = _hidden_place(maze, block.polygon)
         found.strict(
@@ -533,18 +661,88 @@ def _model_in(annotation: Any) -> Any:
     return None
 
 
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+def _shown(value: Any) -> str:
+    """A configuration value as a message quotes it: short and on one line, however large or
+    deeply nested it is."""
+    return reprlib.repr(value)
+
+
+def _number(value: float) -> str:
+    """A number as a student writes it: 6, 0.25, 1,536, 3.6e+12."""
+    if math.isfinite(value) and abs(value) < 1e15 and (value == int(value) or abs(value) >= 1e3):
+        return f"{round(value):,}"
+    return f"{value:.4g}"
+
+
+def _rounded(value: float, *, up: bool) -> str:
+    """A positive suggestion to 3 significant digits, rounded the safe way."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    step = math.ceil if up else math.floor
+    return _number(step(value / scale) * scale)
+
+
+def _point(point: tuple[float, ...] | list[float]) -> str:
+    """A point as written in the file: [6, 42]."""
+    return "[" + ", ".join(_number(v) for v in point) + "]"
+
+
+_WORDING = {
+    "finite_number": "must be a finite number",
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "int_type": "must be a whole number",
+    "int_parsing": "must be a whole number",
+    "int_from_float": "must be a whole number",
+    "bool_type": "must be true or false",
+    "bool_parsing": "must be true or false",
+    "string_type": "must be text in quotes",
+    "tuple_type": "must be a list in brackets, like [1, 2]",
+    "list_type": "must be a list in brackets, like [1, 2]",
+    "greater_than": "must be greater than {gt}",
+    "greater_than_equal": "must be {ge} or more",
+    "less_than": "must be less than {lt}",
+    "less_than_equal": "must be {le} or less",
+    "too_short": "must have at least {min_length} values",
+    "too_long": "must have at most {max_length} values",
+    "literal_error": "must be {expected}",
+}
+"""What each kind of validation error means, in a student's words; each message ends with
+", not <the value given>"."""
+
+
+def _validation_message(error: ErrorDetails, model: type[BaseModel]) -> str:
+    """One validation error as one line saying what the value must be."""
+    kind, loc, given = error["type"], tuple(error["loc"]), _shown(error.get("input"))
+    context = error.get("ctx", {})
+    if kind == "value_error":  # a validator's own message already says what to do
+        return str(context.get("error", error["msg"]))
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        keys = " = ..., ".join(_fields_at(model, loc)) or "key"
+        return f"must be a table like {{ {keys} = ... }}, not {given}"
+    wording = _WORDING.get(kind)
+    limits = {name: _bound(value) for name, value in context.items()}
+    what = wording.format(**limits) if wording else error["msg"]
+    return f"{what}, not {given}"
+
+
+def _bound(value: Any) -> Any:
+    """A limit as a file would write it: 86400, not 86400.0."""
+    if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
+        return int(value)
+    return value
 
 
 def _issues_from_validation(
     exc: ValidationError, prefix: str, model: type[BaseModel]
 ) -> list[ConfigIssue]:
     issues = []
-    for error in exc.errors():
+    errors = exc.errors()
+    failed = {tuple(error["loc"]) for error in errors}
+    for error in errors:
         loc = tuple(error["loc"])
         kind = error["type"]
+        if kind == "too_short" and any(len(f) > len(loc) and f[: len(loc)] == loc for f in failed):
+            continue  # counts only the values that passed; the others are reported already
         if kind == "extra_forbidden":
             name = str(loc[-1])
             hint = _did_you_mean(name, _fields_at(model, loc[:-1]))
@@ -555,7 +753,7 @@ def _issues_from_validation(
         elif kind == "missing":
             message = "required key is missing"
         else:
-            message = f"{error['msg']} (got {_short(error.get('input'))})"
+            message = _validation_message(error, model)
         issues.append(ConfigIssue(_key_path(prefix, loc), message))
     return issues
 

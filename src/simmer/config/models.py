@@ -17,9 +17,9 @@ import codecs
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
-from simmer.devices.base import Color, DeviceParams
+from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.errors import ConfigIssue
 
 Point = tuple[float, float]
@@ -31,6 +31,23 @@ SIMMER_DEFAULT_WALLS: tuple[tuple[int, ...], ...] = (
     (1, 1, 1, 1, 1, 1, 0, 2),
 )
 
+MAX_CELLS_PER_SIDE = 200
+"""Rows, and cells in a row, of ``walls`` (the lab maze is 4 rows of 8): every wall is stored
+and drawn, and a reading walks the maze cell by cell."""
+MAX_FLOOR_TILES = 1_000_000
+"""Floor tiles over the whole maze (the lab maze has 512): the pattern is drawn from one array
+of random numbers, 8 bytes a tile."""
+MAX_DRAWING_PIXELS = 16_384
+"""Pixels a side of the maze drawing (maze size x ``ppi`` + 2 x ``border_pixels``; the lab's is
+1,576 x 808): the largest image most graphics cards draw. The window scales to the screen."""
+MAX_PPI = 200.0
+"""Window pixels per inch: more than any screen shows (a 27-inch 4K screen has 163)."""
+MAX_LINE_WIDTH = 12.0
+"""Inches: a drawn outline wider than a lab maze cell would hide the maze."""
+MAX_TIMEOUT = 86_400.0
+"""Seconds (a day): longer than any lab session; waits of centuries overflow the system's
+timers."""
+
 Group = Literal["motors", "drives", "sensors"]
 """The configuration table a device lives in."""
 DEVICE_GROUPS: tuple[Group, ...] = ("motors", "drives", "sensors")
@@ -39,7 +56,7 @@ DEVICE_GROUPS: tuple[Group, ...] = ("motors", "drives", "sensors")
 class Settings(BaseModel):
     """Every scalar setting of a configuration (BEHAVIOUR §8) plus SimMeR 2 additions."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = SETTINGS_CONFIG
 
     # Control
     rand_error: bool = Field(False, description="True: fresh random noise every run.")
@@ -48,7 +65,7 @@ class Settings(BaseModel):
         (0.02, 0.2),
         description="Standard deviations of the drawn bias: [linear, rotational].",
     )
-    seed: int | None = Field(
+    seed: Whole | None = Field(
         None, ge=0, description="Noise seed when rand_error is false (default: floor_seed)."
     )
     protocol: Literal["packed", "framed"] = Field(
@@ -62,7 +79,7 @@ class Settings(BaseModel):
     )
     frame_start: str = Field("[", description="Framed protocol: the character opening a frame.")
     frame_end: str = Field("]", description="Framed protocol: the character closing a frame.")
-    round_digits: int = Field(
+    round_digits: Whole = Field(
         3, ge=0, le=15, description="Framed protocol: decimals of a reading in a reply."
     )
     lenient_commands: bool = Field(
@@ -76,9 +93,15 @@ class Settings(BaseModel):
     )
     # Network
     host: str = Field("127.0.0.1", description="Address to listen on (this machine only).")
-    port_rx: int = Field(61200, ge=1, le=65535, description="SimMeR TCP: commands arrive here.")
-    port_tx: int = Field(61201, ge=1, le=65535, description="SimMeR TCP: replies leave here.")
-    timeout: float = Field(300.0, gt=0, description="Socket timeout in seconds.")
+    port_rx: Whole = Field(61200, ge=1, le=65535, description="SimMeR TCP: commands arrive here.")
+    port_tx: Whole = Field(61201, ge=1, le=65535, description="SimMeR TCP: replies leave here.")
+    timeout: float = Field(
+        300.0,
+        gt=0,
+        le=MAX_TIMEOUT,
+        description="Seconds (at most a day) a serial reply, a connection that has not sent a "
+        "whole message, or an uncollected two-port reply may wait before it is given up.",
+    )
     str_encoding: str = Field("utf-8", description="Text encoding of commands.")
     # Block
     block_position: Point = Field((66.0, 5.0), description="Block centre [x, y], inches.")
@@ -94,23 +117,50 @@ class Settings(BaseModel):
     )
     # Maze
     wall_segment_length: float = Field(12.0, gt=0, description="Side of a maze cell, inches.")
-    floor_segment_length: float = Field(3.0, gt=0, description="Side of a floor tile, inches.")
-    walls: tuple[tuple[int, ...], ...] = Field(
-        SIMMER_DEFAULT_WALLS, description="Cell matrix, first row on top; 0 = solid, else floor."
+    floor_segment_length: float = Field(
+        3.0,
+        gt=0,
+        description=f"Side of a floor tile, inches (at most {MAX_FLOOR_TILES:,} tiles in all).",
     )
-    floor_seed: int = Field(
+    walls: tuple[tuple[Whole, ...], ...] = Field(
+        SIMMER_DEFAULT_WALLS,
+        description="Cell matrix, first row on top; 0 = solid, else floor "
+        f"(at most {MAX_CELLS_PER_SIDE} x {MAX_CELLS_PER_SIDE}).",
+    )
+    floor_seed: Whole = Field(
         5489, ge=0, lt=2**32, description="Floor pattern seed; 5489 is the lab maze's."
     )
     # Graphics
     frame_rate: float = Field(60.0, gt=0, le=10000, description="Simulation steps per second.")
-    ppi: float = Field(16.0, gt=0, description="Window pixels per inch.")
-    border_pixels: int = Field(20, ge=0, description="Window border around the maze, pixels.")
+    ppi: float = Field(
+        16.0,
+        gt=0,
+        le=MAX_PPI,
+        description=f"Window pixels per inch (at most {MAX_PPI:g}; the maze drawing is at most "
+        f"{MAX_DRAWING_PIXELS:,} pixels a side).",
+    )
+    border_pixels: Whole = Field(20, ge=0, description="Window border around the maze, pixels.")
     background_color: Color = Field((43, 122, 120), description="Window background RGB.")
-    wall_thickness: float = Field(0.25, ge=0, description="Drawn wall width, inches.")
+    wall_thickness: float = Field(
+        0.25,
+        ge=0,
+        le=MAX_LINE_WIDTH,
+        description=f"Drawn wall width, inches (at most {MAX_LINE_WIDTH:g}).",
+    )
     wall_color: Color = Field((255, 0, 0), description="Wall RGB.")
-    robot_thickness: float = Field(0.25, ge=0, description="Drawn robot outline width, inches.")
+    robot_thickness: float = Field(
+        0.25,
+        ge=0,
+        le=MAX_LINE_WIDTH,
+        description=f"Drawn robot outline width, inches (at most {MAX_LINE_WIDTH:g}).",
+    )
     robot_color: Color = Field((0, 0, 255), description="Robot outline RGB.")
-    block_thickness: float = Field(0.25, ge=0, description="Drawn block outline width, inches.")
+    block_thickness: float = Field(
+        0.25,
+        ge=0,
+        le=MAX_LINE_WIDTH,
+        description=f"Drawn block outline width, inches (at most {MAX_LINE_WIDTH:g}).",
+    )
     block_color: Color = Field((127, 127, 20), description="Block RGB.")
     # Debug
     simulate_list: tuple[str, ...] = Field(
@@ -141,10 +191,24 @@ class Settings(BaseModel):
     @field_validator("str_encoding")
     @classmethod
     def _known_encoding(cls, value: str) -> str:
+        """A text encoding that writes the protocol's ASCII as ASCII, both ways: commands,
+        frames and replies are ASCII text. ``rot13`` and ``hex`` are not text encodings (the
+        first message would fail); ``utf-16`` and ``utf-32`` turn every command into NaN."""
         try:
-            codecs.lookup(value)
+            info = codecs.lookup(value)
         except LookupError:
-            raise ValueError(f"unknown text encoding {value!r}; use 'utf-8'") from None
+            raise ValueError(f"unknown text encoding {value!r}; use 'utf-8' or 'ascii'") from None
+        sample = "".join(map(chr, range(32, 127))) + "\r\n"  # every printable ASCII character
+        try:
+            carries = info._is_text_encoding and sample.encode(value).decode(value) == sample
+            carries = carries and sample.encode(value) == sample.encode("ascii")
+        except (UnicodeError, LookupError):
+            carries = False
+        if not carries:
+            raise ValueError(
+                f"{value!r} cannot carry the protocol, whose commands are ASCII text; "
+                "use 'utf-8' or 'ascii'"
+            )
         return value
 
     @field_validator("background_color", "wall_color", "robot_color", "block_color", mode="after")

@@ -17,6 +17,10 @@ from simmer.config.models import DeviceSpec, SimConfig
 from simmer.devices import get_device_kind
 from simmer.errors import CommandError, ConfigIssue, describe_exception
 
+DEVICE_FAULTS = (Exception, SystemExit)
+"""What a device's code may raise that ``check`` reports rather than stopping on: any error,
+and ``sys.exit()``."""
+
 
 def _hint(exc: BaseException) -> str:
     """What to do about an exception raised by a device's code."""
@@ -49,7 +53,7 @@ def probe_devices(config: SimConfig) -> list[ConfigIssue]:
     base = source.parent if source.is_file() else None
     try:
         sim = Simulation(config)
-    except Exception as exc:
+    except DEVICE_FAULTS as exc:
         return _construction_issues(config, base) or [
             ConfigIssue("", f"building the simulation raised {describe_exception(exc, base)}")
         ]
@@ -65,7 +69,7 @@ def probe_devices(config: SimConfig) -> list[ConfigIssue]:
                     device.simulate(0.0, sim)
                 action = "shapes()"
                 device.shapes(sim)
-        except Exception as exc:
+        except DEVICE_FAULTS as exc:
             issues.append(_issue(spec, action, exc, base))
     return issues
 
@@ -79,6 +83,6 @@ def _construction_issues(config: SimConfig, base: Path | None) -> list[ConfigIss
             continue  # the simulation's own error says so
         try:
             kind(spec.id, spec.params, np.random.default_rng(0))
-        except Exception as exc:
+        except DEVICE_FAULTS as exc:
             issues.append(_issue(spec, "building the device", exc, base))
     return issues

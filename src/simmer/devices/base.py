@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Literal, Protocol
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, Protocol
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic_core import PydanticCustomError
 
 from simmer.geometry import FloatArray, Pose, Vec2, rectangle
 
@@ -31,7 +32,39 @@ if TYPE_CHECKING:
     from simmer.world.robot import Robot
 
 Category = Literal["motor", "drive", "sensor"]
-Color = tuple[int, int, int]
+
+
+def _not_bool(value: Any) -> Any:
+    """Refuse true and false where a whole number belongs (pydantic reads them as 1 and 0)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("whole_number", "must be a whole number")
+    return value
+
+
+Whole = Annotated[int, BeforeValidator(_not_bool)]
+"""A whole number setting (a port, a count, a seed...): ``true`` is not 1. ``36.0`` is 36, as
+an original config.py computing ``border_pixels = floor_segment_length * ppi`` needs."""
+Color = tuple[Whole, Whole, Whole]
+"""RGB, each 0 to 255."""
+
+SETTINGS_CONFIG = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+"""The configuration of every settings model (top-level settings, device parameters and the
+models nested in them): an unknown key is an error, values never change, and no number may be
+NaN or infinite (TOML's ``nan`` and ``inf``, a config.py's ``float('nan')``): one such value
+makes every later reading NaN or crashes the window. A subclass of :class:`DeviceParams`
+inherits it; give a model nested in one ``model_config = SETTINGS_CONFIG`` too."""
+
+
+def _mount_shape(value: Any) -> Any:
+    """Refuse anything but two or three values in one line, before the values themselves are
+    checked (two tuple types in a union would each report their own complaint)."""
+    if isinstance(value, list | tuple) and len(value) in (2, 3):
+        return value
+    raise PydanticCustomError("mount", "must be [x, y] (or [x, y, height]) in inches")
+
+
+Mount = Annotated[tuple[float, ...], BeforeValidator(_mount_shape)]
+"""A device's place on the robot: [x, y] or [x, y, height], inches."""
 
 
 class DeviceParams(BaseModel):
@@ -43,10 +76,10 @@ class DeviceParams(BaseModel):
     not have (errors in a TOML file, warnings for an original ``config.py``).
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = SETTINGS_CONFIG
 
     type: str = Field(description="Registered device kind, e.g. 'ultrasonic'.")
-    position: tuple[float, float] | tuple[float, float, float] = Field(
+    position: Mount = Field(
         (0.0, 0.0), description="[x, y] (optionally [x, y, height]) in the robot frame, inches."
     )
     rotation: float = Field(0.0, description="Degrees from the robot's +y axis.")

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
-from simmer.devices.base import Category, Device, DeviceParams, World
+from simmer.devices.base import SETTINGS_CONFIG, Category, Device, DeviceParams, World
 from simmer.devices.motor import Motor
 from simmer.errors import CommandError
 
@@ -28,7 +28,7 @@ from simmer.errors import CommandError
 class Axes(BaseModel):
     """A value along robot x, robot y and rotation (used for drive bias and error)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = SETTINGS_CONFIG
 
     x: float = 0.0
     y: float = 0.0

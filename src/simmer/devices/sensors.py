@@ -8,7 +8,16 @@ from typing import ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from simmer.devices.base import Circle, Color, Device, DeviceParams, Segment, Shape, World
+from simmer.devices.base import (
+    Circle,
+    Color,
+    Device,
+    DeviceParams,
+    Segment,
+    Shape,
+    Whole,
+    World,
+)
 from simmer.geometry import (
     FloatArray,
     Vec2,
@@ -40,7 +49,7 @@ class UltrasonicParams(MeasuredParams):
     beamwidth: float = Field(
         15.0, ge=0, lt=180, description="Cone angle in degrees (0 only in an original config.py)."
     )
-    num_rays: int = Field(7, ge=1, le=1000, description="Rays cast across the cone.")
+    num_rays: Whole = Field(7, ge=1, le=1000, description="Rays cast across the cone.")
     min_range: float = Field(0.0, ge=0, description="Shortest reading, inches.")
     max_range: float = Field(433.0, gt=0, description="Longest reading, inches.")
     error: float = Field(0.02, ge=0, description="Percent error (SimMeR's, sd 2·error).")

@@ -19,6 +19,16 @@ from simmer.geometry import (
 )
 
 
+def floor_tiles(cols: int, rows: int, cell: float, tile: float) -> tuple[float, float]:
+    """Tiles across and down the floor, as SimMeR counts them: a part tile counts, but rounding
+    to 9 decimals first keeps 96 / 3 at 32. Floats, since an absurd size gives an absurd count
+    (even infinity), which the configuration check refuses before anything is allocated."""
+    across, down = cols * cell / tile, rows * cell / tile
+    if not (math.isfinite(across) and math.isfinite(down)):
+        return across, down
+    return float(math.ceil(round(across, 9))), float(math.ceil(round(down, 9)))
+
+
 def floor_pattern(cols: int, rows: int, cell: float, tile: float, seed: int) -> BoolArray:
     """SimMeR's floor: True = white, indexed [row, column] of tiles.
 
@@ -26,8 +36,8 @@ def floor_pattern(cols: int, rows: int, cell: float, tile: float, seed: int) -> 
     Twister seeded with ``seed`` draws ``n_x · n_y`` values; tile (ix, iy) takes draw
     ``ix · n_y + iy`` and is white when it is at least 0.5.
     """
-    n_x = math.ceil(round(cols * cell / tile, 9))
-    n_y = math.ceil(round(rows * cell / tile, 9))
+    across, down = floor_tiles(cols, rows, cell, tile)
+    n_x, n_y = int(across), int(down)
     draws = np.random.RandomState(seed).random(n_x * n_y)
     result: BoolArray = (draws.reshape(n_x, n_y) >= 0.5).T.copy()
     return result
@@ -98,7 +108,7 @@ class Maze:
     def open_cell_centre(self) -> list[float]:
         """Centre of the first open cell (for error-message suggestions)."""
         rows, cols = np.nonzero(~self.solid)
-        return [(cols[0] + 0.5) * self.cell, (rows[0] + 0.5) * self.cell]
+        return [(int(cols[0]) + 0.5) * self.cell, (int(rows[0]) + 0.5) * self.cell]
 
     def cast_ray(self, x: float, y: float, heading: float, limit: float = math.inf) -> float:
         """Distance from (x, y) along ``heading`` to the first wall (inf if beyond ``limit``)."""
