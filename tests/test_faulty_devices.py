@@ -312,3 +312,18 @@ def test_probe_calls_no_drive() -> None:
     config = make_config(data)
     assert "x0" in Simulation(config).robot.devices
     assert probe_devices(config) == []
+
+
+def test_a_device_calling_sys_exit_is_switched_off_not_the_simulator() -> None:
+    class Quitter(Device):
+        def simulate(self, value: float, world: World) -> float:
+            raise SystemExit(0)
+
+    register_device_kind("test_quitter", Quitter, replace=True)
+    data = default_data()
+    data["sensors"]["q0"] = {"type": "test_quitter"}
+    sim = Simulation(make_config(data))
+    replies = sim.command("q0,u1")
+    assert math.isnan(replies[0])
+    assert replies[1] == pytest.approx(3.5)
+    assert "q0" in sim.switched_off

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import logging
 from enum import StrEnum
 from pathlib import Path
@@ -39,6 +40,33 @@ ConfigArg = Annotated[
         show_default=False,
     ),
 ]
+
+
+def _print_version(wanted: bool) -> None:
+    """``--version``: print the installed package's version and stop."""
+    if wanted:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            out.print(f"simmer {version('simmer')}", markup=False)
+        except PackageNotFoundError:  # run from a source tree without installing
+            out.print("simmer (version unknown: not installed; pip install -e .)", markup=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def options(
+    show_version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            help="Print SimMeR's version and exit.",
+            callback=_print_version,
+            is_eager=True,
+        ),
+    ] = False,
+) -> None:
+    """SimMeR, the Simulator for Mechatronics Robots."""
 
 
 def _report_config_error(exc: ConfigError) -> None:
@@ -90,10 +118,11 @@ def keys(
     text = reference_markdown()
     if markdown:
         print(text, end="")
-    else:
+    else:  # the note for whoever maintains docs/configuration.md is not for a terminal
         from rich.markdown import Markdown
 
-        out.print(Markdown(text))
+        lines = [line for line in text.splitlines() if "do not edit by hand" not in line]
+        out.print(Markdown("\n".join(lines)))
 
 
 @app.command()
@@ -114,12 +143,26 @@ def run(
         typer.Option(help="Address to listen on (default: the configuration's, 127.0.0.1)."),
     ] = None,
     port_rx: Annotated[
-        int | None, typer.Option(help="SimMeR two-port scheme: message port (default 61200).")
+        int | None,
+        typer.Option(
+            help="SimMeR two-port scheme: message port (default: the configuration's, 61200; "
+            "0: any free port).",
+            min=0,
+            max=65535,
+        ),
     ] = None,
     port_tx: Annotated[
-        int | None, typer.Option(help="SimMeR two-port scheme: reply port (default 61201).")
+        int | None,
+        typer.Option(
+            help="SimMeR two-port scheme: reply port (default: the configuration's, 61201; "
+            "0: any free port).",
+            min=0,
+            max=65535,
+        ),
     ] = None,
-    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = 61202,
+    port: Annotated[
+        int, typer.Option(help="Persistent protocol port (0: any free port).", min=0, max=65535)
+    ] = 61202,
     serial: Annotated[
         bool, typer.Option(help="Also serve a virtual serial port (a pseudo-terminal).")
     ] = False,
@@ -153,7 +196,13 @@ def run(
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
     if reply_bytes not in (None, 4, 8):
         raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
-    overrides = {"protocol": protocol and protocol.value, "reply_bytes": reply_bytes}
+    overrides = {  # into the configuration, so that the start-up summary shows what is used
+        "protocol": protocol and protocol.value,
+        "reply_bytes": reply_bytes,
+        "host": host,
+        "port_rx": port_rx or None,  # 0 is no setting: the transport lines say which port
+        "port_tx": port_tx or None,
+    }
     try:
         loaded = load_config(config)
         loaded = loaded.with_settings(**{k: v for k, v in overrides.items() if v is not None})
@@ -181,7 +230,6 @@ def run(
             window=not headless,
             speed=pace,
             seconds=seconds,
-            host=host,
             port_rx=port_rx,
             port_tx=port_tx,
             stream_port=port,
@@ -193,9 +241,31 @@ def run(
         err.print(f"[bold red]{exc}[/]")
         raise typer.Exit(1) from None
     except OSError as exc:
-        err.print(f"[bold red]cannot serve: {exc}[/] (is another simmer running?)")
+        err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(f"t = {sim.time:.2f} s, robot at {sim.robot.pose}", markup=False)
+
+
+def _serve_failure(exc: OSError, host: str) -> str:
+    """Why the simulator could not listen, pointing at the fix (only a port in use can mean
+    another simmer)."""
+    if exc.errno == errno.EADDRINUSE:
+        return (
+            f"cannot serve: {exc}. Another simmer run (or another program) is using this port: "
+            "close it, or choose other ports with --port-rx, --port-tx and --port"
+        )
+    if ":" in host:  # an IPv6 address, and the servers listen on IPv4 (AF_INET) sockets
+        return (
+            f"cannot serve on '{host}': SimMeR listens on IPv4 addresses only; use --host "
+            "127.0.0.1 (this machine) or --host 0.0.0.0 (every network). The system said: "
+            f"{exc.strerror or exc}"
+        )
+    if exc.errno == errno.EADDRNOTAVAIL:
+        return (
+            f"cannot serve on '{host}': not an address of this machine ({exc.strerror}); "
+            "use --host 127.0.0.1 (this machine) or --host 0.0.0.0 (every network)"
+        )
+    return f"cannot serve: {exc}"
 
 
 @app.command()

@@ -4,7 +4,9 @@ Works over any :mod:`simmer.client` connection: the persistent protocol, SimMeR'
 scheme or a serial port (the simulator's virtual one or the robot's). Replies are shown in the
 form in use: numbers for packed replies; for SimMeR v1.2's framed text (``--framed``) the reply
 as sent (``[u0:15.45,w0:True]``), like the stock v1.2 client, with a warning when an entry's id
-is not the command's. Line editing and history come from readline where it is available.
+is not the command's; over the persistent protocol a NaN reply is followed by the simulator's
+reason. Line editing and history come from readline where it is available;
+``help`` (or ``?``) prints the help again.
 """
 
 from __future__ import annotations
@@ -19,10 +21,12 @@ from simmer.errors import ClientError
 from simmer.protocol import command_ids, read_framed_reply
 
 HISTORY = Path.home() / ".simmer_history"
+LOCAL_HELP = ("help", "?")
+"""What the console answers itself with :data:`HELP` instead of sending it to the simulator."""
 HELP = (
     "Commands: u0 (read a sensor), w0-6 (drive 6 in), w0--6 (back), r0-90 (turn), xx (stop),\n"
     "several at once with commas: u0,u1,u2,u3. Replies: +inf accepted, nan rejected or invalid.\n"
-    "Type 'quit' (or Ctrl-D) to leave."
+    "Type 'help' (or ?) to see this again, 'quit' (or Ctrl-D) to leave."
 )
 
 
@@ -89,6 +93,9 @@ def run_console(
                 break
             if line in ("quit", "exit"):
                 break
+            if line.lower() in LOCAL_HELP:
+                echo(HELP)
+                continue
             if not line:
                 continue
             try:
@@ -98,5 +105,9 @@ def run_console(
                 continue
             text = client.link.last_text
             echo(format_exchange(line, replies) if text is None else format_framed(line, text))
+            if text is None and any(map(math.isnan, replies)):
+                with contextlib.suppress(ClientError):  # the next command reports a lost link
+                    if why := client.explain():  # the simulator's reasons (persistent only)
+                        echo("  why: " + why.replace("\n", "\n       "))
     finally:
         save()

@@ -12,7 +12,11 @@ Two ways to read a command:
   character is skipped whatever it is and a value ``float()`` cannot read counts as 0. The
   command then names the rules it used (``lenient``), so the simulation can warn once.
   Non-finite values and values beyond ±1e9 are still refused (the original would drive
-  forever): a difference on purpose.
+  forever), and so is a value with any character outside ASCII (``float()`` reads ``٥`` and
+  ``６`` as digits): differences on purpose.
+
+Only the ASCII digits 0-9 are digits, in both readings. Text a client sent is written into the
+log through :func:`printable`, so it cannot move the cursor or reorder the line.
 
 The second half is the byte level shared by every transport: decoding a received message
 (non-text bytes become NaN replies, never a dead listener) and the two reply codecs, packed
@@ -34,7 +38,8 @@ SEPARATOR = "-"
 SEPARATORS = ("-", ":")
 """What strict parsing accepts after the device id: SimMeR's ``-`` and SimMeR v1.2's ``:``."""
 MAX_ABS_VALUE = 1e9
-_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+"""A decimal number in ASCII digits (``\\d`` would also match ``٥`` and ``６``)."""
 
 
 @dataclass(frozen=True)
@@ -77,13 +82,25 @@ def parse_command(text: str, *, lenient: bool = False) -> Command:
         )
     raw = stripped[3:]
     if not _NUMBER.fullmatch(raw):
-        return Command(text, device, error=f"{raw!r} is not a decimal number")
+        only = "" if raw.isascii() else " (only the ASCII digits 0-9 are read)"
+        return Command(text, device, error=f"{raw!r} is not a decimal number{only}")
     return _in_range(Command(text, device, float(raw)), raw)
 
 
 def _parse_lenient(text: str, stripped: str) -> Command:
-    """The originals' reading: skip character 3, ``float()`` the rest, 0 if that fails."""
+    """The originals' reading: skip character 3, ``float()`` the rest, 0 if that fails.
+
+    Unlike the originals, a value with a character outside ASCII is refused (NaN, with the
+    reason): ``float()`` reads other scripts' digits (``٥``, ``６``) and spaces, which a
+    student never meant as a number. A difference on purpose.
+    """
     device, skipped, raw = stripped[:2], stripped[2], stripped[3:]
+    if not raw.isascii():
+        return Command(
+            text,
+            device,
+            error=f"{raw!r} has characters outside ASCII (only the digits 0-9 are read)",
+        )
     rules: tuple[str, ...] = () if skipped in SEPARATORS else ("skip",)
     try:
         value = float(raw)
@@ -104,6 +121,21 @@ def _in_range(command: Command, raw: str) -> Command:
     )
 
 
+def printable(text: str) -> str:
+    """``text`` safe to quote in a log line: each character that is not printable written as
+    its Python escape (ESC as ``\\x1b``, the right-to-left override as ``\\u202e``).
+
+    Clients choose what they send; unescaped, a terminal escape could recolour or clear the
+    terminal and a bidirectional control could reorder the line. Non-printable means what
+    :meth:`str.isprintable` says: control characters, format characters (every bidirectional
+    control) and separators other than the space. Printable text comes back unchanged, so text
+    already quoted with ``repr`` is not escaped twice.
+    """
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
+
+
 def parse_message(text: str, *, lenient: bool = False) -> list[Command]:
     """Split a message on commas and parse each command; an empty message is one bad command."""
     return [parse_command(part, lenient=lenient) for part in text.strip().split(",")]
@@ -119,19 +151,35 @@ def command_ids(text: str) -> list[str]:
 MAX_MESSAGE_BYTES = 64 * 1024
 """Longest message accepted, in bytes (without its line ending)."""
 
+MAX_COMMANDS = 1000
+"""Most commands in one message. A message over it answers one NaN and runs nothing: 1,000
+commands cost the loop about 15 ms (one frame at 60 steps/s, ultrasonic reads being the
+dearest), far more than a robot program sends at once (one per device, a dozen devices), and
+their reply frame stays a few kilobytes. The persistent protocol's uint16 count could say
+65,535, but such a message would hold every other client up for a second."""
+
 REPLY_FORMATS = {4: "<f", 8: "<d"}
 """``struct`` format of one reply value by width: float32 (SimMeR 1.1, Arduino) or float64."""
 
 FRAME_HEADER = struct.Struct("<BH")
 """Persistent-protocol reply header: value width in bytes (4 or 8), then the value count."""
+MAX_FRAME_COUNT = 0xFFFF
+"""The most a frame header's count can say."""
+
+EXPLAIN = b"?"
+"""Persistent protocol: a line asking why the last message's replies were NaN; the answer is
+a text frame (header width :data:`TEXT_WIDTH`, count = bytes of UTF-8 text)."""
+TEXT_WIDTH = 0
+MAX_TEXT_BYTES = 4096
+"""Longest text frame: a few dozen reasons."""
 
 
 @dataclass(frozen=True)
 class Decoded:
     """A message as received: its text, or (``text is None``) why it cannot be executed.
 
-    ``count`` is how many NaN replies an undecodable message gets: one per comma-separated
-    command, so a client still receives exactly one value per command it sent.
+    ``count`` is how many replies it gets: one per comma-separated command, so a client
+    receives exactly one value per command it sent; a message over a limit gets one NaN.
     """
 
     text: str | None
@@ -139,17 +187,48 @@ class Decoded:
     error: str | None = None
     ids: tuple[str, ...] = ()
     """Framed text only: the ids of an undecodable message's commands, for its NaN reply."""
+    over_limit: bool = False
+    """Over :data:`MAX_MESSAGE_BYTES` or :data:`MAX_COMMANDS`: nothing in it runs, and the
+    persistent protocol closes the connection after the reply (its framing cannot be trusted)."""
+
+
+def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
+    """What a message of ``size`` bytes and ``commands`` commands decodes to if it breaks a
+    limit (one NaN; ``framed``: nothing, as for a v1.2 message with no frame), else None."""
+    count = 0 if framed else 1
+    if size > MAX_MESSAGE_BYTES:
+        return Decoded(
+            None,
+            count,
+            f"message of {size} bytes is over {MAX_MESSAGE_BYTES}",
+            over_limit=True,
+        )
+    if commands > MAX_COMMANDS:
+        return Decoded(
+            None,
+            count,
+            f"message of {commands} commands is over the limit of {MAX_COMMANDS}; send fewer "
+            "at a time",
+            over_limit=True,
+        )
+    return None
+
+
+def _not_text(exc: UnicodeDecodeError, encoding: str) -> str:
+    """Why bytes are not a message, for the log and the NaN's reason."""
+    return f"not {encoding} text ({exc.reason} at byte {exc.start})"
 
 
 def decode_message(data: bytes, encoding: str = "utf-8") -> Decoded:
-    """Decode the bytes of one message (line ending already removed, or not)."""
-    if len(data) > MAX_MESSAGE_BYTES:
-        return Decoded(None, 1, f"message of {len(data)} bytes is over {MAX_MESSAGE_BYTES}")
+    """Decode the bytes of one message (line ending already removed, or not); the limits are
+    checked before anything else is done with it."""
     count = data.count(b",") + 1
+    if (refused := over_limit(len(data), count)) is not None:
+        return refused
     try:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
-        return Decoded(None, count, f"not {encoding} text ({exc.reason} at byte {exc.start})")
+        return Decoded(None, count, _not_text(exc, encoding))
     return Decoded(text.rstrip("\r\n"), count)
 
 
@@ -168,8 +247,18 @@ def unpack_replies(data: bytes, width: int = 4) -> list[float]:
 
 
 def frame_replies(values: Sequence[float], width: int = 4) -> bytes:
-    """Persistent protocol: header (width, count) followed by the packed values."""
+    """Persistent protocol: header (width, count) followed by the packed values; ValueError
+    for more values than the header's count can say."""
+    if len(values) > MAX_FRAME_COUNT:
+        raise ValueError(f"{len(values)} values do not fit a frame (at most {MAX_FRAME_COUNT})")
     return FRAME_HEADER.pack(width, len(values)) + pack_replies(values, width)
+
+
+def frame_text(text: str) -> bytes:
+    """Persistent protocol: the text frame answering :data:`EXPLAIN` (width 0, then the
+    number of bytes, then UTF-8 text cut to at most :data:`MAX_TEXT_BYTES`)."""
+    data = text.encode("utf-8")[:MAX_TEXT_BYTES].decode("utf-8", errors="ignore").encode()
+    return FRAME_HEADER.pack(TEXT_WIDTH, len(data)) + data
 
 
 def read_frame_header(header: bytes) -> tuple[int, int]:
@@ -242,11 +331,16 @@ class FramedCodec:
     encoding: str = "ascii"
 
     def decode(self, data: bytes) -> Decoded:
-        """The commands of the frames in ``data``; no complete frame: nothing is sent back."""
-        if len(data) > MAX_MESSAGE_BYTES:
-            return Decoded(None, 0, f"message of {len(data)} bytes is over {MAX_MESSAGE_BYTES}")
-        plain = decode_message(data, self.encoding)
-        text = data.decode(self.encoding, errors="replace") if plain.text is None else plain.text
+        """The commands of the frames in ``data``; no complete frame, or a message over a
+        limit: nothing is sent back."""
+        if (refused := over_limit(len(data), 0, framed=True)) is not None:
+            return refused
+        error = None
+        try:
+            text = data.decode(self.encoding)
+        except UnicodeDecodeError as exc:
+            error = _not_text(exc, self.encoding)
+            text = data.decode(self.encoding, errors="replace")
         commands = unwrap_frames(text, self.start, self.end)
         if commands is None:
             shown = text if len(text) <= 40 else text[:37] + "..."
@@ -256,10 +350,13 @@ class FramedCodec:
                 f"no complete frame {self.start}...{self.end} in {shown!r}; nothing is sent "
                 f"back (SimMeR v1.2 frames every message, e.g. {self.start}u0{self.end})",
             )
-        if plain.text is None:
+        count = commands.count(",") + 1
+        if (refused := over_limit(0, count, framed=True)) is not None:
+            return refused
+        if error is not None:
             ids = tuple(command_ids(commands))
-            return Decoded(None, len(ids), plain.error, ids)
-        return Decoded(commands)
+            return Decoded(None, len(ids), error, ids)
+        return Decoded(commands, count)
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """One frame with an ``id:value`` entry per command, in order."""

@@ -3,24 +3,32 @@
 The TOML holds exactly the data :func:`~simmer.config.simmer_py.load_simmer_py` validates, so
 loading it gives the same configuration. A comment written after a setting in the config.py
 (``robot_width = 6  # Robot width in inches``) follows that setting; one after a device's entry
-(``'u0': Ultrasonic(u0_info),  # front``) follows its table header.
+(``'u0': Ultrasonic(u0_info),  # front``) follows its table header. A setting commented out
+(``# 'error': 0.02,`` in an info dictionary, ``# simulate_list = ['u0']``) stays commented out,
+written in TOML where it was (``# error = 0.02`` in the device's table), so the lab's toggles
+are still one uncomment away. What a comment says that is no longer true (the original's
+"placeholder, not implemented" beside ``rand_bias``) is left out.
 """
 
 from __future__ import annotations
 
 import os
+import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import tomlkit
-from tomlkit.items import Array, InlineTable, Item
+from tomlkit.items import Array, Comment, InlineTable, Item, Table
 
 from simmer.config.loader import config_from_dict
 from simmer.config.models import DEVICE_GROUPS
-from simmer.config.simmer_py import SimmerPy, read_simmer_py
+from simmer.config.simmer_py import CommentedOut, SimmerPy, read_simmer_py
 from simmer.errors import ConfigError, ConfigIssue
 
 MULTILINE = frozenset({"walls"})
+STALE = re.compile(r"\s*\(?placeholder, not implemented\)?", re.IGNORECASE)
+"""What the originals' comments say that SimMeR 2 made untrue (it draws drive biases)."""
 
 
 def convert_simmer_py(path: str | Path, output: str | Path | None = None) -> str:
@@ -53,8 +61,12 @@ def _document(source: SimmerPy, out_dir: Path) -> tomlkit.TOMLDocument:
         doc.add(tomlkit.nl())
     in_file = [k for k in settings if k in source.spans]
     in_file.sort(key=lambda k: source.spans[k][0])
-    for key in in_file:
-        doc.add(key, _item(source, key, source.data[key]))
+    top_commented = [c for c in source.commented_out if not c.table]
+    for entry in _interleave(in_file, source.spans, top_commented):
+        if isinstance(entry, CommentedOut):
+            doc.add(_commented(entry, set_too=entry.key in source.data))
+        else:
+            doc.add(entry, _item(source, entry, source.data[entry]))
     for group in DEVICE_GROUPS:
         devices = source.data.get(group, {})
         if not devices:
@@ -62,19 +74,64 @@ def _document(source: SimmerPy, out_dir: Path) -> tomlkit.TOMLDocument:
         super_table = tomlkit.table(is_super_table=True)
         for device_id, values in devices.items():
             path = f"{group}.{device_id}"
-            table = tomlkit.table()
-            for key, value in values.items():
-                written = (
-                    _relative(source.path.parent / value, out_dir) if key == "module" else value
-                )
-                table.add(key, _item(source, f"{path}.{key}", written))
-            entry_comment = source.comment_for(path)
-            if entry_comment and not _same_line_as_a_key(source, path):
-                table.comment(entry_comment)
-            super_table.add(device_id, table)
+            super_table.add(device_id, _device_table(source, path, values, out_dir))
         doc.add(tomlkit.nl())
         doc.add(group, super_table)
     return doc
+
+
+def _device_table(source: SimmerPy, path: str, values: dict[str, Any], out_dir: Path) -> Table:
+    """One device's table, its commented-out settings where they were written."""
+    table = tomlkit.table()
+    commented = [c for c in source.commented_out if c.table == path]
+    spans = {
+        key: source.spans[f"{path}.{key}"] for key in values if f"{path}.{key}" in source.spans
+    }
+    for entry in _interleave(list(values), spans, commented):
+        if isinstance(entry, CommentedOut):
+            table.add(_commented(entry, set_too=entry.key in values))
+            continue
+        value = values[entry]
+        written = _relative(source.path.parent / value, out_dir) if entry == "module" else value
+        table.add(entry, _item(source, f"{path}.{entry}", written))
+    entry_comment = _current(source.comment_for(path))
+    if entry_comment and not _same_line_as_a_key(source, path):
+        table.comment(entry_comment)
+    return table
+
+
+def _interleave(
+    keys: list[str], spans: dict[str, tuple[int, int]], commented: list[CommentedOut]
+) -> Iterator[str | CommentedOut]:
+    """``keys`` in their order, each commented-out setting just before the first key written
+    after it in the config.py (the rest at the end)."""
+    pending = sorted(commented, key=lambda c: c.line)
+    for key in keys:
+        line = spans[key][0] if key in spans else None
+        while pending and line is not None and pending[0].line < line:
+            yield pending.pop(0)
+        yield key
+    yield from pending
+
+
+def _commented(setting: CommentedOut, *, set_too: bool) -> Comment:
+    """A commented-out setting as a TOML comment: ``# error = 0.02``."""
+    key = tomlkit.key(setting.key).as_string()
+    try:
+        text = f"{key} = {_value(setting.value).as_string()}"
+    except ValueError:  # None: no TOML for it; keep what the config.py said
+        text = f"{key} = {setting.value!r}"
+    notes = [note for note in (_current(setting.comment),) if note]
+    if set_too:
+        notes.append(f"uncomment only after deleting the other `{setting.key}` line")
+    return tomlkit.comment(f"{text}  # {'; '.join(notes)}" if notes else text)
+
+
+def _current(comment: str | None) -> str | None:
+    """``comment`` without what is no longer true (:data:`STALE`); None if nothing is left."""
+    if comment is None:
+        return None
+    return STALE.sub("", comment).strip() or None
 
 
 def _same_line_as_a_key(source: SimmerPy, path: str) -> bool:
@@ -97,7 +154,7 @@ def _item(source: SimmerPy, key: str, value: Any) -> Item:
         raise ConfigError(source.path, [ConfigIssue(key, str(exc), source.line_of(key))]) from None
     if key in MULTILINE and isinstance(item, Array):
         item.multiline(True)
-    comment = source.comment_for(key)
+    comment = _current(source.comment_for(key))
     if comment:
         item.comment(comment)
     return item

@@ -20,7 +20,10 @@ applies, with the config.py line where the setting is written:
   beside a ``velocity``, ``outline_thickness`` (every outline is drawn at one width), and an
   infrared sensor's ``bias`` (SimMeR 2's infrared has none);
 * an object of the user's own class (``from devices.template import Template``) in ``sensors``
-  becomes ``type = "simmer_device"`` (:mod:`simmer.compat.template`).
+  becomes ``type = "simmer_device"`` (:mod:`simmer.compat.template`);
+* a setting written in a whole-line comment, in an info dictionary (``# 'error': 0.02,``) or
+  at the top level (``# simulate_list = ['u0']``), is kept in :attr:`SimmerPy.commented_out`:
+  the lab switches noise on by uncommenting such lines, so ``simmer convert`` carries them over.
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ from typing import Any
 
 from simmer.compat import template
 from simmer.compat.standins import StandInDevice, StandIns, Vector2, builtin_kind, captured_info
-from simmer.config.loader import DEFAULT_KIND, config_from_dict
+from simmer.config.loader import DEFAULT_KIND, config_from_dict, oversize_walls
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
 from simmer.errors import ConfigError, ConfigIssue, describe_exception
 
@@ -49,18 +52,34 @@ IGNORED_SETTINGS = frozenset({"maze_dim_x", "maze_dim_y"})
 """SimMeR settings that SimMeR 2 derives itself (the maze's size in inches)."""
 
 
+@dataclass(frozen=True)
+class CommentedOut:
+    """A setting written in a whole-line comment: ``table`` is the device's path
+    (``drives.w0``), or "" for a top-level setting; ``comment`` is one written after it."""
+
+    table: str
+    key: str
+    value: Any
+    line: int
+    comment: str | None = None
+
+
 @dataclass
 class SimmerPy:
     """A SimMeR ``config.py`` read into native data, with where each key is written.
 
     ``spans`` maps a native key path (``robot_width``, ``sensors.u0``, ``sensors.u0.height``)
-    to its first and last line; ``comments`` maps a line to the comment written on it.
+    to its first and last line; ``comments`` maps a line to the comment written after code on
+    it, ``alone`` a line to a whole-line comment.
     """
 
     path: Path
     data: dict[str, Any]
     spans: dict[str, tuple[int, int]] = field(default_factory=dict)
     comments: dict[int, str] = field(default_factory=dict)
+    alone: dict[int, str] = field(default_factory=dict)
+    commented_out: list[CommentedOut] = field(default_factory=list)
+    """Settings commented out, in the order of the file (see the module doc)."""
     version: str = ""
     """The original release the file was written for: ``v1.0``, ``v1.1`` or ``v1.2``."""
     origin: str = ""
@@ -116,7 +135,8 @@ def read_simmer_py(path: str | Path) -> SimmerPy:
         tree = ast.parse(text, str(path))
     except SyntaxError as exc:
         raise ConfigError(path, [_syntax_issue(exc, text)]) from None
-    result = SimmerPy(path, {}, comments=_comments(text))
+    after_code, alone = _comments(text)
+    result = SimmerPy(path, {}, comments=after_code, alone=alone)
     namespace = _run(path, code)
     _Mapper(result, namespace, tree).map()
     return result
@@ -192,17 +212,48 @@ def _frames(exc: BaseException) -> list[tuple[str, int]]:
 # ----------------------------------------------------------------------------- source positions
 
 
-def _comments(text: str) -> dict[int, str]:
-    """Comments written after code on a line, by line number (whole-line comments are skipped)."""
-    found: dict[int, str] = {}
+def _comments(text: str) -> tuple[dict[int, str], dict[int, str]]:
+    """Comments by line number, without their ``#``: those written after code on a line, and
+    whole-line ones."""
+    after_code: dict[int, str] = {}
+    alone: dict[int, str] = {}
     code_lines: set[int] = set()
     skip = (tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT)
     for token in tokenize.generate_tokens(io.StringIO(text).readline):
-        if token.type == tokenize.COMMENT and token.start[0] in code_lines:
-            found[token.start[0]] = token.string.lstrip("#").strip()
+        if token.type == tokenize.COMMENT:
+            found = after_code if token.start[0] in code_lines else alone
+            found[token.start[0]] = token.string[1:].strip()
         elif token.type not in skip:
             code_lines.update(range(token.start[0], token.end[0] + 1))
-    return found
+    return after_code, alone
+
+
+def _commented_setting(text: str, *, entry: bool) -> tuple[str, Any, str | None] | None:
+    """A whole-line comment read as a setting: ``'error': 0.02,  # noisy`` (an info dictionary
+    ``entry``) or ``simulate_list = ['u0']`` -> key, value, the comment after it; None if the
+    comment is prose, or code that is not a literal setting."""
+    try:
+        if entry:
+            node = ast.parse("{\n" + text + "\n}", mode="eval").body
+            if not (isinstance(node, ast.Dict) and len(node.keys) == 1):
+                return None
+            key, value = node.keys[0], node.values[0]
+            name = key.value if isinstance(key, ast.Constant) else None
+        else:
+            body = ast.parse(text).body
+            statement = body[0] if len(body) == 1 else None
+            if not (isinstance(statement, ast.Assign) and len(statement.targets) == 1):
+                return None
+            target, value = statement.targets[0], statement.value
+            name = target.id if isinstance(target, ast.Name) else None
+        if not isinstance(name, str):
+            return None
+        literal = _plain(ast.literal_eval(value))
+    except (SyntaxError, ValueError, TypeError, MemoryError, RecursionError):
+        return None
+    tokens = tokenize.generate_tokens(io.StringIO(text).readline)
+    comment = next((t.string[1:].strip() for t in tokens if t.type == tokenize.COMMENT), None)
+    return name, literal, comment or None
 
 
 def _assignments(tree: ast.Module) -> dict[str, tuple[ast.stmt, ast.expr]]:
@@ -236,11 +287,17 @@ class _Mapper:
         self.assigned = {name: value for name, (_, value) in self.statements.items()}
         self.issues: list[ConfigIssue] = []
         self.motor_ids: dict[int, str] = {}
+        self.top_level = [_span(node) for node in tree.body]
+        self.info_dicts: dict[str, ast.Dict] = {}  # device path -> its info dictionary literal
 
     def map(self) -> None:
         data = self.result.data
         for name, (statement, _) in self.statements.items():
             self.result.spans[name] = _span(statement)
+        oversize = oversize_walls(self.namespace.get("walls"))
+        if oversize is not None:  # before copying it: a huge matrix took minutes to copy
+            issue = replace(oversize, line=self.result.line_of("walls"))
+            raise ConfigError(self.result.path, [issue])
         for name in Settings.model_fields:
             if name in self.namespace:
                 data[name] = _plain(self.namespace[name])
@@ -264,6 +321,7 @@ class _Mapper:
                 data[group] = self._group(group, table)
         if self.issues:
             raise ConfigError(self.result.path, self.issues)
+        self._commented_out()
 
     def _missing_group(self, group: str, last_line: int) -> ConfigIssue:
         before = {"motors": None, "drives": "motors", "sensors": "drives"}[group]
@@ -326,6 +384,8 @@ class _Mapper:
             return
         arg = call.args[0]
         literal = self.assigned.get(arg.id) if isinstance(arg, ast.Name) else arg
+        if isinstance(literal, ast.Dict):
+            self.info_dicts[path] = literal
         for key, (key_node, value) in _dict_entries(literal).items():
             self.result.spans[f"{path}.{key}"] = _span(value, key_node)
             for sub, (sub_node, sub_value) in _dict_entries(value).items():
@@ -395,6 +455,47 @@ class _Mapper:
             )
             return None
         return {"type": template.KIND, "module": module, "class_name": cls.__name__, **native}
+
+    def _commented_out(self) -> None:
+        """Find the settings written in whole-line comments (see the module doc)."""
+        spans = self.result.spans
+        for line, text in sorted(self.result.alone.items()):
+            table = next(
+                (
+                    path
+                    for path, literal in self.info_dicts.items()
+                    if literal.lineno < line < (literal.end_lineno or 0)
+                ),
+                None,
+            )
+            if table is not None:
+                inside_a_value = any(
+                    key.startswith(f"{table}.") and first <= line <= last
+                    for key, (first, last) in spans.items()
+                )
+                found = None if inside_a_value else _commented_setting(text, entry=True)
+                if found is None or not self._kept(table, found[0], found[1]):
+                    continue
+            elif any(first <= line <= last for first, last in self.top_level):
+                continue
+            else:
+                table = ""
+                found = _commented_setting(text, entry=False)
+                if found is None or found[0] not in Settings.model_fields:
+                    continue
+            key, value, comment = found
+            self.result.commented_out.append(CommentedOut(table, key, value, line, comment))
+
+    def _kept(self, path: str, key: str, value: Any) -> bool:
+        """Whether a commented-out entry of a device's info dictionary means something to
+        SimMeR 2 (not its ``id``, nor a key the mapping drops)."""
+        group, _, device_id = path.partition(".")
+        native = self.result.data.get(group, {}).get(device_id)
+        if key == "id" or native is None:
+            return False
+        entry = {key: value}
+        self._drop_meaningless(path, native.get("type", DEFAULT_KIND.get(group, "")), entry)
+        return bool(entry)
 
     def _drop_meaningless(self, path: str, kind: str, native: dict[str, Any]) -> None:
         dropped = [k for k in ("outline_thickness",) if k in native]

@@ -10,6 +10,8 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -115,16 +117,41 @@ class Stopwatch:
         return end - self.start
 
 
+@dataclass(frozen=True)
+class RepeatedCommand(CommandEvent):
+    """A message answered the same way ``count`` times in a row; ``time`` is the last one's."""
+
+    count: int = 1
+
+
 class CommandLog:
-    """The last few messages and their replies, collected from the simulation's events."""
+    """The last few messages and their replies, collected from the simulation's events.
+
+    A message answered as the one before it was (``wait_idle()`` polling ``w0-0`` until the
+    drive is done) extends that entry's count instead of taking a line, so the student's own
+    commands stay on screen.
+    """
 
     def __init__(self, size: int = 5) -> None:
         self.entries: deque[CommandEvent] = deque(maxlen=size)
 
     def __call__(self, event: Event) -> None:
         """Observe one simulation event."""
-        if isinstance(event, CommandEvent):
+        if not isinstance(event, CommandEvent):
+            return
+        last = self.entries[-1] if self.entries else None
+        if last is None or last.message != event.message or not _same(last.replies, event.replies):
             self.entries.append(event)
+            return
+        count = last.count if isinstance(last, RepeatedCommand) else 1
+        self.entries[-1] = RepeatedCommand(event.time, event.message, event.replies, count + 1)
+
+
+def _same(a: Sequence[float], b: Sequence[float]) -> bool:
+    """Equal reply values, NaN equal to NaN."""
+    return len(a) == len(b) and all(
+        x == y or (math.isnan(x) and math.isnan(y)) for x, y in zip(a, b, strict=True)
+    )
 
 
 def _reply(value: float) -> str:
@@ -227,6 +254,8 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
     for i, event in enumerate(reversed(commands)):
         replies = ", ".join(_reply(v) for v in event.replies)
         line = f"{event.time:7.2f} s  {event.message[:28]} -> {replies[:40]}"
+        if isinstance(event, RepeatedCommand):
+            line += f"  x{event.count}"
         r.draw_text(line, (COMMANDS_X, 32 + 16 * i), TEXT, 18)
 
     clients = snap.clients

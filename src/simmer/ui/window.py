@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -352,11 +353,16 @@ def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surf
 
 
 def run_window(
-    runner: Runner, until: float | None = None, stop: threading.Event | None = None
+    runner: Runner,
+    until: float | None = None,
+    stop: threading.Event | None = None,
+    echo: Callable[[str], None] | None = None,
 ) -> None:
     """Open a window on the runner's simulation; run until the user quits, ``stop`` is set, or
     simulated ``until`` seconds (see :meth:`Window.run`).
 
+    Once it is open, ``echo`` hears "window open" if the window can be seen; if it cannot (no
+    screen), the log says so instead: one message, the true one.
     Raises :class:`~simmer.errors.SimmerError` if no window can be opened (no display).
     """
     bridge = Bridge(runner.sim)
@@ -372,6 +378,8 @@ def run_window(
             "window cannot be seen; use --headless to skip drawing",
             driver,
         )
+    elif echo is not None:
+        echo("window open (press h for help)")
     try:
         window.run(runner, until=until, stop=stop)
     finally:

@@ -22,7 +22,7 @@ from simmer.config.models import SimConfig
 from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
 from simmer.errors import CommandError, DeviceKindError, describe_exception
 from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
-from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message
+from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message, printable
 from simmer.world.events import (
     CollisionEvent,
     CommandEvent,
@@ -36,6 +36,9 @@ from simmer.world.robot import Robot
 
 log = logging.getLogger("simmer")
 
+DEVICE_FAULTS = (Exception, SystemExit)
+"""What a device's own code may raise without stopping the run (a ``sys.exit`` in a student's
+device included); it switches that device off. Ctrl-C still stops everything."""
 MANUAL_SPEED = 6.0  # in/s, BEHAVIOUR §3
 MANUAL_TURN = 120.0  # deg/s
 MANUAL_KEYS = "wasdqe"
@@ -150,17 +153,18 @@ class Simulation:
 
     # ----------------------------------------------------------------- commands
 
-    def command(self, message: str) -> list[float]:
+    def command(self, message: str, reasons: list[tuple[int, str]] | None = None) -> list[float]:
         """Execute a message such as ``"w0-6,u0"``; one reply value per command, in order.
 
         A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
-        an unknown device answers NaN and logs why.
+        an unknown device answers NaN and logs why (or adds it to ``reasons``, see
+        :meth:`execute`).
         """
         commands = parse_message(message, lenient=self._lenient)
         for command in commands:
             if command.lenient:
                 self._warn_lenient(command)
-        replies = [self.execute(command) for command in commands]
+        replies = [self.execute(command, reasons) for command in commands]
         if self.observers:
             self._emit(CommandEvent(self._time, message, tuple(replies)))
         return replies
@@ -172,35 +176,81 @@ class Simulation:
                 continue
             self._lenient_warned.add((command.device, rule))
             log.warning(
-                "command %r read as %s-%g: %s, as in the original SimMeR (said once per device; "
+                "command '%s' read as %s-%g: %s, as in the original SimMeR (said once per device; "
                 "lenient_commands = false makes such commands answer NaN)",
-                command.text.strip(),
-                command.device,
+                printable(command.text.strip()),
+                printable(command.device),
                 command.value,
                 LENIENT_RULES[rule],
             )
 
-    def execute(self, command: Command) -> float:
-        """Execute one parsed command and return its reply value."""
+    def execute(self, command: Command, reasons: list[tuple[int, str]] | None = None) -> float:
+        """Execute one parsed command and return its reply value.
+
+        Why a command answers NaN is logged; given ``reasons``, each (level, text) record goes
+        there instead (with a busy drive's too), so the caller can log a bounded number per
+        message and tell the client.
+        """
         if command.error is not None:
-            log.warning("bad command %r: %s", command.text, command.error)
-            return math.nan
+            return self._nan(
+                reasons,
+                logging.WARNING,
+                "bad command '%s': %s",
+                printable(command.text),
+                printable(command.error),
+            )
         if command.device == STOP_ID:
             self._robot.stop()
             return math.inf
         if command.device in self._switched_off:
-            log.debug("command %r: device %r is switched off", command.text, command.device)
-            return math.nan
+            return self._nan(
+                reasons,
+                logging.DEBUG,
+                "command '%s': device %s is switched off",
+                printable(command.text),
+                command.device,
+            )
         device = self._robot.devices.get(command.device)
         if device is None:
-            log.warning("bad command %r: no device %r on the robot", command.text, command.device)
-            return math.nan
+            return self._nan(
+                reasons,
+                logging.WARNING,
+                "bad command '%s': no device '%s' on the robot",
+                printable(command.text),
+                printable(command.device),
+            )
         try:
-            return float(device.simulate(command.value, self))
+            value = float(device.simulate(command.value, self))
         except CommandError as exc:
-            log.warning("bad command %r: %s", command.text, exc)
-        except Exception as exc:
+            return self._nan(
+                reasons,
+                logging.WARNING,
+                "bad command '%s': %s",
+                printable(command.text),
+                printable(str(exc)),
+            )
+        except DEVICE_FAULTS as exc:
             self._switch_off(device, f"command {command.text!r}", exc)
+            return self._nan(
+                reasons,
+                logging.DEBUG,
+                "command '%s': device %s raised and is switched off",
+                printable(command.text),
+                command.device,
+            )
+        if reasons is not None and math.isnan(value) and command.device in self._robot.drives:
+            reasons.append((logging.DEBUG, f"'{printable(command.text)}': a drive is still moving"))
+        return value
+
+    @staticmethod
+    def _nan(
+        reasons: list[tuple[int, str]] | None, level: int, message: str, *args: object
+    ) -> float:
+        """Answer NaN: log why, or add the record to ``reasons`` (see :meth:`execute`)."""
+        if reasons is None:
+            log.log(level, message, *args)
+        else:
+            reasons.append((level, message % args))
         return math.nan
 
     # ----------------------------------------------------------------- time
@@ -246,21 +296,21 @@ class Simulation:
         for device in self._updating:
             try:
                 device.update(self)
-            except Exception as exc:
+            except DEVICE_FAULTS as exc:
                 self._switch_off(device, "update()", exc)
         for device in self._listed:
             try:
                 device.simulate(0.0, self)
             except CommandError as exc:
                 self._unlist(device, exc)
-            except Exception as exc:
+            except DEVICE_FAULTS as exc:
                 self._switch_off(device, "simulate() for simulate_list", exc)
         if self.observers:
             self._emit(StepEvent(self._time, robot.pose))
 
     # ----------------------------------------------------------------- faulty devices
 
-    def _switch_off(self, device: Device, during: str, exc: Exception) -> None:
+    def _switch_off(self, device: Device, during: str, exc: BaseException) -> None:
         """A device's own code raised: log it once and leave the device out until reset.
 
         Its commands then answer NaN and its update, simulate_list call and shapes are
@@ -297,7 +347,7 @@ class Simulation:
                 continue
             try:
                 shapes += device.shapes(self)
-            except Exception as exc:
+            except DEVICE_FAULTS as exc:
                 self._switch_off(device, "shapes()", exc)
         return shapes
 
