@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import logging
+import os
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -13,6 +14,7 @@ from rich.console import Console
 
 from simmer.config import SimConfig, load_config, summarize
 from simmer.errors import ConfigError
+from simmer.ports import STREAM_PORT
 
 app = typer.Typer(
     name="simmer",
@@ -23,6 +25,13 @@ app = typer.Typer(
 )
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+class Clock(StrEnum):
+    """Choices of ``--clock``."""
+
+    realtime = "realtime"
+    lockstep = "lockstep"
 
 
 class Protocol(StrEnum):
@@ -133,8 +142,14 @@ def run(
         float | None, typer.Option(help="Stop after this many simulated seconds.")
     ] = None,
     speed: Annotated[
-        str, typer.Option(help="Speed as a multiple of real time (e.g. 2), or 'max'.")
-    ] = "1",
+        str | None,
+        typer.Option(
+            help="Speed as a multiple of real time (e.g. 2), or 'max' (default: 1, or max for a "
+            "headless --program run). Without the lockstep clock, results at 'max' depend on "
+            "the machine.",
+            show_default=False,
+        ),
+    ] = None,
     seed: Annotated[
         int | None, typer.Option(help="Noise seed (overrides the configuration's).")
     ] = None,
@@ -161,8 +176,11 @@ def run(
         ),
     ] = None,
     port: Annotated[
-        int, typer.Option(help="Persistent protocol port (0: any free port).", min=0, max=65535)
-    ] = 61202,
+        int | None,
+        typer.Option(
+            help="Persistent protocol port (default 61202; 0: any free port).", min=0, max=65535
+        ),
+    ] = None,
     serial: Annotated[
         bool, typer.Option(help="Also serve a virtual serial port (a pseudo-terminal).")
     ] = False,
@@ -185,15 +203,60 @@ def run(
             max=8,
         ),
     ] = None,
+    program: Annotated[
+        str | None,
+        typer.Option(
+            help='Start this control program (e.g. "python my_robot.py") on free ports and '
+            "end the run when it exits; its clock follows simulated time (lockstep).",
+            show_default=False,
+        ),
+    ] = None,
+    clock: Annotated[
+        Clock | None,
+        typer.Option(
+            help="realtime: simulated time follows the wall clock; lockstep: it advances only "
+            "when the program sleeps (and per message), so runs repeat exactly (default: "
+            "lockstep with --program, else realtime).",
+            show_default=False,
+        ),
+    ] = None,
+    link_delay: Annotated[
+        float | None,
+        typer.Option(
+            help="Lockstep: simulated seconds each message costs (default: one step).",
+            min=0,
+            show_default=False,
+        ),
+    ] = None,
+    timeout: Annotated[
+        float | None,
+        typer.Option(
+            help="Stop the run (and the program's whole process tree) after this many "
+            "wall-clock seconds; exit status 124.",
+            min=0,
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
-    """Run the simulator on CONFIG (default: the built-in lab maze and rover)."""
+    """Run the simulator on CONFIG (default: the built-in lab maze and rover).
+
+    With --program, the run ends when the program exits (with its exit status), at --seconds
+    of simulated time (status 3) or at --timeout wall seconds (status 124).
+    """
     from simmer.serve import parse_speed
     from simmer.world import Simulation
 
+    lockstep = (clock or (Clock.lockstep if program else Clock.realtime)) == Clock.lockstep
+    if speed is None:
+        speed = "max" if headless and program else "1"
     try:
         pace = parse_speed(speed)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    if program is not None:  # this run's own free ports, so that runs can share a machine
+        port_rx = 0 if port_rx is None else port_rx
+        port_tx = 0 if port_tx is None else port_tx
+        port = 0 if port is None else port
     if reply_bytes not in (None, 4, 8):
         raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
     overrides = {  # into the configuration, so that the start-up summary shows what is used
@@ -224,18 +287,25 @@ def run(
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
+    log_file = _log_to_file() if program is not None else None
+    if log_file is not None:
+        out.print(f"the simulator's log goes to {log_file}", markup=False)
     try:
-        serve(
+        served = serve(
             sim,
             window=not headless,
             speed=pace,
             seconds=seconds,
             port_rx=port_rx,
             port_tx=port_tx,
-            stream_port=port,
+            stream_port=STREAM_PORT if port is None else port,
             serial=serial,
             serial_link=serial_link,
             echo=lambda line: out.print(line, markup=False),
+            program=program,
+            lockstep=lockstep,
+            link_delay=link_delay,
+            timeout=timeout,
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -243,7 +313,32 @@ def run(
     except OSError as exc:
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
-    out.print(f"t = {sim.time:.2f} s, robot at {sim.robot.pose}", markup=False)
+    out.print(served.outcome.report().summary(), markup=False)
+    if program is not None:
+        if served.ended_by == "program":
+            ended = f"the program exited with status {served.program_status}"
+        elif served.ended_by == "seconds":
+            ended = f"the limit of {seconds} s of simulated time was reached"
+        elif served.ended_by == "timeout":
+            ended = f"the {timeout} s wall-clock timeout was reached; the program was stopped"
+        else:
+            ended = "the run was stopped"
+        out.print(f"run ended: {ended}; log: {log_file}", markup=False)
+    raise typer.Exit(served.exit_status)
+
+
+def _log_to_file() -> Path:
+    """Send the simulator's log to a file, so a program's printout is not mixed with it."""
+    import tempfile
+
+    path = Path(tempfile.gettempdir()) / f"simmer-{os.getpid()}.log"
+    handler = logging.FileHandler(path, encoding="utf-8")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    root = logging.getLogger()
+    for old in list(root.handlers):
+        root.removeHandler(old)
+    root.addHandler(handler)
+    return path
 
 
 def _serve_failure(exc: OSError, host: str) -> str:
@@ -293,7 +388,7 @@ def convert(
 @app.command()
 def console(
     host: Annotated[str, typer.Option(help="Simulator address.")] = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = 61202,
+    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = STREAM_PORT,
     two_port: Annotated[
         bool, typer.Option(help="Use SimMeR's two-port scheme (61200/61201) instead.")
     ] = False,

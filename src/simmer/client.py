@@ -17,13 +17,15 @@ persistent protocol, :meth:`Client.explain` asks why the last message's NaN repl
 from __future__ import annotations
 
 import math
+import os
 import socket
 import time
 from pathlib import Path
 from types import TracebackType
-from typing import Literal, Protocol
+from typing import Literal, Protocol, runtime_checkable
 
 from simmer.errors import ConnectionFailed, ReplyTimeout
+from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 from simmer.protocol import (
     EXPLAIN,
     FRAME_HEADER,
@@ -33,10 +35,6 @@ from simmer.protocol import (
     read_framed_reply,
     unpack_replies,
 )
-
-STREAM_PORT = 61202
-PORT_RX = 61200
-PORT_TX = 61201
 
 Scheme = Literal["stream", "two-port", "serial"]
 
@@ -57,6 +55,15 @@ class Link(Protocol):
 
     def close(self) -> None:
         """Release the connection."""
+        ...
+
+
+@runtime_checkable
+class ClockLink(Protocol):
+    """A link that can send clock messages (the persistent protocol, or an in-process one)."""
+
+    def clock(self, message: str) -> float:
+        """Send ``!sleep S``, ``!idle`` or ``!time``; the simulated time after it."""
         ...
 
 
@@ -100,6 +107,13 @@ class StreamLink:
             raise ReplyTimeout(f"no reply to {message!r} from {self.address}") from None
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
+
+    def clock(self, message: str) -> float:
+        """Send a clock message (``!sleep S``, ``!idle``, ``!time``); the simulated time."""
+        (value,) = self.exchange(message)
+        if math.isnan(value):
+            raise ReplyTimeout(f"the simulator refused the clock message {message!r}")
+        return value
 
     def explain(self) -> str:
         """Why the last message's NaN replies are NaN, one reason a line ("" if none)."""
@@ -222,10 +236,21 @@ class SerialLink:
 
 
 class Client:
-    """A connection to the simulator or robot; use :func:`connect` to make one."""
+    """A connection to the simulator or robot; use :func:`connect` to make one.
 
-    def __init__(self, link: Link) -> None:
+    With ``lockstep`` (a persistent-protocol link to a simulator on the lockstep clock),
+    :meth:`sleep` and :meth:`wait_idle` ask the simulator to advance its clock instead of
+    waiting on the wall clock.
+    """
+
+    def __init__(self, link: Link, *, lockstep: bool = False) -> None:
         self.link = link
+        self._clock = link if lockstep and isinstance(link, ClockLink) else None
+
+    @property
+    def lockstep(self) -> bool:
+        """True if :meth:`sleep` and :meth:`wait_idle` advance the simulator's clock."""
+        return self._clock is not None
 
     def send(self, message: str) -> list[float]:
         """Send a message such as ``"u0,u1"``; one value per command (NaN: rejected/invalid)."""
@@ -245,13 +270,22 @@ class Client:
         """Read one sensor (or motor odometer)."""
         return self.send(device_id)[0]
 
+    def sleep(self, seconds: float) -> None:
+        """Let ``seconds`` pass: simulated seconds in lockstep, else wall-clock ones."""
+        if self._clock is not None:
+            self._clock.clock(f"!sleep {float(seconds)!r}")
+        else:
+            time.sleep(seconds)
+
     def wait_idle(self, drive_id: str = "w0", poll: float = 0.01, timeout: float = 600.0) -> None:
         """Wait until no drive is moving (a zero-length move of ``drive_id`` is accepted)."""
+        if self._clock is not None:
+            self._clock.clock("!idle")
         deadline = time.monotonic() + timeout
         while not math.isinf(self.drive(drive_id, 0)):
             if time.monotonic() > deadline:
                 raise ReplyTimeout(f"drives still moving after {timeout} s")
-            time.sleep(poll)
+            self.sleep(poll)
 
     def close(self) -> None:
         """Close the connection."""
@@ -266,18 +300,24 @@ class Client:
         self.close()
 
 
+def _from_env(name: str, default: int) -> int:
+    value = os.environ.get(name, "")
+    return int(value) if value.isdigit() else default
+
+
 def connect(
-    host: str = "127.0.0.1",
-    port: int = STREAM_PORT,
+    host: str | None = None,
+    port: int | None = None,
     *,
     scheme: Scheme | None = None,
-    port_rx: int = PORT_RX,
-    port_tx: int = PORT_TX,
+    port_rx: int | None = None,
+    port_tx: int | None = None,
     serial: str | Path | None = None,
     baudrate: int = 9600,
     width: int = 4,
     timeout: float = 30.0,
     framed: bool = False,
+    lockstep: bool | None = None,
 ) -> Client:
     """Connect with the persistent protocol (default), ``scheme="two-port"``, or ``serial=PATH``.
 
@@ -285,7 +325,19 @@ def connect(
     say or reveal their own width. ``framed=True`` speaks SimMeR v1.2's framed text over the
     two-port scheme (the default scheme then) or a serial port; the persistent protocol always
     uses its own frames. Raises :class:`~simmer.errors.ConnectionFailed`.
+
+    Unless given, the address and ports come from ``SIMMER_HOST``, ``SIMMER_PORT``,
+    ``SIMMER_PORT_RX`` and ``SIMMER_PORT_TX`` (``simmer run --program`` sets them to the run's
+    own ports), else 127.0.0.1 and SimMeR's standard ports; ``lockstep`` (for :meth:`Client.
+    sleep` and :meth:`Client.wait_idle`) from ``SIMMER_LOCKSTEP``: set it for a program you
+    start by hand against ``simmer run --clock lockstep``.
     """
+    host = host if host is not None else os.environ.get("SIMMER_HOST", "127.0.0.1")
+    port = port if port is not None else _from_env("SIMMER_PORT", STREAM_PORT)
+    port_rx = port_rx if port_rx is not None else _from_env("SIMMER_PORT_RX", PORT_RX)
+    port_tx = port_tx if port_tx is not None else _from_env("SIMMER_PORT_TX", PORT_TX)
+    if lockstep is None:
+        lockstep = bool(os.environ.get("SIMMER_LOCKSTEP"))
     if scheme is None:
         scheme = "serial" if serial is not None else ("two-port" if framed else "stream")
     frame = FRAME if framed else None
@@ -300,4 +352,4 @@ def connect(
         if framed:
             raise ValueError("framed=True is for scheme='two-port' or a serial port")
         link = StreamLink(host, port, timeout)
-    return Client(link)
+    return Client(link, lockstep=lockstep)

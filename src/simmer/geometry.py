@@ -42,6 +42,21 @@ class Pose(NamedTuple):
     heading: float
 
 
+def polygon_gap(a: FloatArray, b: FloatArray) -> float:
+    """Smallest distance between the outlines of two polygons (0 if their edges cross)."""
+    best = math.inf
+    for points, poly in ((a, b), (b, a)):
+        starts = poly
+        ends = np.roll(poly, -1, axis=0)
+        edge = ends - starts
+        length2 = np.maximum((edge**2).sum(axis=1), 1e-12)
+        for p in points:
+            t = np.clip(((p - starts) * edge).sum(axis=1) / length2, 0.0, 1.0)
+            nearest = starts + t[:, None] * edge
+            best = min(best, float(np.sqrt(((p - nearest) ** 2).sum(axis=1)).min()))
+    return best
+
+
 def heading_vector(heading_deg: float) -> Vec2:
     """Unit vector of a heading: 0° points down (+y), 90° left (-x)."""
     rad = math.radians(heading_deg)

@@ -190,6 +190,8 @@ class Decoded:
     over_limit: bool = False
     """Over :data:`MAX_MESSAGE_BYTES` or :data:`MAX_COMMANDS`: nothing in it runs, and the
     persistent protocol closes the connection after the reply (its framing cannot be trusted)."""
+    clock: bool = False
+    """A clock message (persistent protocol, ``!...``; see :func:`parse_clock`)."""
 
 
 def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
@@ -401,3 +403,31 @@ def framed_value(value: str) -> float:
         return float(value)
     except ValueError:
         return math.nan
+
+
+# --------------------------------------------------------------------------- clock messages
+
+CLOCK_PREFIX = b"!"
+"""A persistent-protocol line starting with this is a clock message, not robot commands."""
+
+
+@dataclass(frozen=True)
+class ClockMessage:
+    """``!sleep S`` (advance S seconds), ``!idle`` (until no drive moves) or ``!time``."""
+
+    kind: str
+    seconds: float = 0.0
+
+
+def parse_clock(text: str) -> ClockMessage:
+    """Parse a clock message; raises ``ValueError`` saying what is wrong."""
+    words = text.strip().lstrip("!").split()
+    if words in (["time"], ["idle"]):
+        return ClockMessage(words[0])
+    if len(words) == 2 and words[0] == "sleep" and _NUMBER.fullmatch(words[1]):
+        seconds = float(words[1])
+        if 0 <= seconds <= MAX_ABS_VALUE:
+            return ClockMessage("sleep", seconds)
+    raise ValueError(
+        f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle' or '!time'"
+    )

@@ -7,6 +7,13 @@ read is an instant snapshot, a drive starts at the next step), and calls ``on_fr
 ~60 times per wall-clock second. The window's hook (:meth:`simmer.ui.bridge.Bridge.sync`) only
 applies queued key and mouse actions and publishes an immutable snapshot; the window draws it in
 another thread, so drawing never delays a reply.
+
+With ``lockstep=True`` the wall clock decides nothing: the simulation advances only when a
+control program asks (the persistent protocol's clock messages, see :mod:`simmer.lockstep`)
+and by ``link_delay`` after each message it sends, so the same program gives the same run at
+any speed and on any machine. ``speed`` then only paces the steps for a window to watch.
+Clock messages also work in real time: ``!sleep S`` answers once S simulated seconds have
+passed, ``!idle`` once no drive moves, ``!time`` at once.
 """
 
 from __future__ import annotations
@@ -19,7 +26,8 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from simmer.protocol import printable
+from simmer.lockstep import FREE_TIME_READS
+from simmer.protocol import parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 
@@ -37,7 +45,21 @@ MAX_LOGGED = 3
 MAX_REASONS = 20
 """Why-NaN reasons kept per message for the client (the persistent protocol's ``?``)."""
 
+IDLE_LIMIT = 600.0
+"""Longest ``!idle`` wait, in simulated seconds (a drive that never finishes cannot hang it)."""
+EPSILON = 1e-9
+
 FrameCallback = Callable[["Runner"], bool]
+
+
+@dataclass
+class _Wait:
+    """A clock message waiting for simulated time: until ``until`` (seconds) or, with
+    ``until`` None, until no drive moves (at most until ``deadline``)."""
+
+    request: Request
+    until: float | None
+    deadline: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -60,6 +82,8 @@ class Runner:
         speed: float | None = 1.0,
         bus: CommandBus | None = None,
         history: int = 20,
+        lockstep: bool = False,
+        link_delay: float | None = None,
     ) -> None:
         self.sim = sim
         self.bus = bus if bus is not None else CommandBus()
@@ -68,6 +92,16 @@ class Runner:
         self._speed: float | None = None
         self._reschedule = True
         self.speed = speed
+        self.lockstep = lockstep
+        self.link_delay = sim.dt if link_delay is None else link_delay
+        """Simulated seconds each message costs in lockstep (default one step, as the
+        original's loop, which took in messages once per frame)."""
+        if not (math.isfinite(self.link_delay) and self.link_delay >= 0):
+            raise ValueError(f"link_delay must be 0 or more seconds, not {link_delay!r}")
+        self.clock = sim.time
+        """Lockstep: the program's clock; the simulation steps until it would pass it."""
+        self._reads = 0
+        self._waits: list[_Wait] = []
 
     @property
     def speed(self) -> float | None:
@@ -92,8 +126,15 @@ class Runner:
 
     def handle(self, request: Request) -> list[float]:
         """Execute one request on the simulation and fulfil its future. Why its NaN replies are
-        NaN is logged (bounded, see :data:`MAX_LOGGED`) and kept in ``request.reasons``."""
+        NaN is logged (bounded, see :data:`MAX_LOGGED`) and kept in ``request.reasons``. A
+        clock message is answered later, when simulated time has got where it asks."""
         decoded = request.decoded
+        if decoded.clock and decoded.text is not None:
+            self._clock_message(request, decoded.text)
+            return []
+        if self.lockstep:
+            self.clock = max(self.clock, self.sim.time) + self.link_delay
+            self._reads = 0
         if decoded.text is None:
             error = printable(str(decoded.error))
             log.warning("bad message from %s: %s", printable(request.client), error)
@@ -109,6 +150,82 @@ class Runner:
         request.future.set_result(replies)
         return replies
 
+    # ----------------------------------------------------------------- the clock
+
+    def _clock_message(self, request: Request, text: str) -> None:
+        """Register ``!sleep``, ``!idle`` or ``!time`` (see the module doc)."""
+        try:
+            clock = parse_clock(text)
+        except ValueError as exc:
+            log.warning("%s: %s", printable(request.client), exc)
+            request.reasons.append(str(exc))
+            request.future.set_result([math.nan])
+            return
+        sim = self.sim
+        if not self.lockstep:
+            if clock.kind == "sleep":
+                self._waits.append(_Wait(request, sim.time + clock.seconds))
+            elif clock.kind == "idle":
+                self._waits.append(_Wait(request, None, sim.time + IDLE_LIMIT))
+            else:
+                request.future.set_result([sim.time])
+            return
+        self.clock = max(self.clock, sim.time)
+        if clock.kind == "idle":
+            self._reads = 0
+            self._waits.append(_Wait(request, None, sim.time + IDLE_LIMIT))
+            return
+        if clock.kind == "sleep" and clock.seconds > 0:
+            self._reads = 0
+            self.clock += clock.seconds
+        else:  # a clock read (or sleep(0)): free, unless the program is only waiting on it
+            self._reads += 1
+            if self._reads > FREE_TIME_READS:
+                self._reads = 0
+                self.clock += sim.dt
+        self._waits.append(_Wait(request, self.clock))
+
+    def catch_up(self) -> None:
+        """Lockstep, in this thread: step until the clock and every clock message are met."""
+        while self._due():
+            self.sim.step()
+            self._settle()
+        self._settle()
+
+    def _due(self) -> bool:
+        """Lockstep: whether the simulation must step to catch up with the clock or a wait."""
+        sim = self.sim
+        if (sim.frame + 1) * sim.dt <= self.clock + EPSILON:
+            return True
+        return any(w.until is None and self._moving(w) for w in self._waits)
+
+    def _moving(self, wait: _Wait) -> bool:
+        return self.sim.robot.any_drive_moving and self.sim.time < wait.deadline - EPSILON
+
+    def _settle(self) -> None:
+        """Answer the clock messages whose time has come."""
+        if not self._waits:
+            return
+        sim = self.sim
+        waiting = []
+        for wait in self._waits:
+            if wait.until is None:
+                done = not self._moving(wait)
+                if done and self.lockstep:
+                    self.clock = max(self.clock, sim.time)
+                value = self.clock if self.lockstep else sim.time
+            elif self.lockstep:
+                done = (sim.frame + 1) * sim.dt > wait.until + EPSILON
+                value = wait.until
+            else:
+                done = sim.time >= wait.until - EPSILON
+                value = sim.time
+            if done:
+                wait.request.future.set_result([value])
+            else:
+                waiting.append(wait)
+        self._waits = waiting
+
     @staticmethod
     def _report(client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
         """Log the first few (level, text) records of one message and count the rest; keep
@@ -122,7 +239,7 @@ class Runner:
         if len(records) > MAX_REASONS:
             reasons.append(f"... and {len(records) - MAX_REASONS} more")
 
-    def serve(self, timeout: float = 0.0) -> int:
+    def serve(self, timeout: float = 0.0, limit: int | None = None) -> int:
         """Answer the requests queued once the wait (up to ``timeout`` s) ends; how many.
 
         Requests queued meanwhile (a client refilling its pipeline as replies go out) wait for
@@ -131,7 +248,7 @@ class Runner:
         """
         self.bus.wait(timeout)
         served = 0
-        for _ in range(self.bus.queued):
+        for _ in range(self.bus.queued if limit is None else min(limit, self.bus.queued)):
             request = self.bus.get()
             if request is None:
                 break
@@ -142,6 +259,7 @@ class Runner:
                 if not request.future.done():
                     request.future.set_exception(exc)
             served += 1
+        self._settle()
         return served
 
     def run(
@@ -151,6 +269,9 @@ class Runner:
         until: float | None = None,
     ) -> None:
         """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``."""
+        if self.lockstep:
+            self._run_lockstep(on_frame, stop_event, until)
+            return
         sim = self.sim
         next_step = next_frame = time.monotonic()
         while not (stop_event is not None and stop_event.is_set()):
@@ -173,9 +294,47 @@ class Runner:
             elif speed is None or now >= next_step:
                 self.serve()
                 sim.step()
+                self._settle()
                 if speed is not None:
                     next_step += sim.dt / speed
                     if now - next_step > MAX_LAG:
                         next_step = now
             else:
                 self.serve(min(next_step - now, wake - now, MAX_WAIT))
+
+    def _run_lockstep(
+        self,
+        on_frame: FrameCallback | None,
+        stop_event: threading.Event | None,
+        until: float | None,
+    ) -> None:
+        """Step only while the clock or a clock message asks for it; otherwise take the next
+        request, one at a time, so a program's messages meet the simulation in its order."""
+        sim = self.sim
+        next_step = next_frame = time.monotonic()
+        while not (stop_event is not None and stop_event.is_set()):
+            if until is not None and sim.time >= until - EPSILON:
+                break
+            now = time.monotonic()
+            if on_frame is not None and now >= next_frame:
+                if not on_frame(self):
+                    break
+                next_frame = max(next_frame + FRAME_INTERVAL, now)
+                now = time.monotonic()
+            wake = next_frame if on_frame is not None else math.inf
+            if self._reschedule:
+                self._reschedule = False
+                next_step = now
+            speed = self._speed
+            if self.paused or not self._due():
+                self.serve(min(wake - now, MAX_WAIT), limit=1)
+                next_step = max(next_step, time.monotonic()) if speed is not None else next_step
+            elif speed is None or now >= next_step:
+                sim.step()
+                self._settle()
+                if speed is not None:
+                    next_step += sim.dt / speed
+                    if now - next_step > MAX_LAG:
+                        next_step = now
+            else:
+                self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))

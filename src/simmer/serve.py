@@ -9,12 +9,15 @@ import logging
 import signal
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 
+from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Link
 from simmer.world import Simulation
+from simmer.world.outcome import Outcome
 
 log = logging.getLogger("simmer.serve")
 
@@ -64,6 +67,33 @@ def _stop_on_signals() -> Callable[[], None]:
     return restore
 
 
+@dataclass
+class Served:
+    """How a run served by :func:`serve` went."""
+
+    runner: Runner
+    outcome: Outcome
+    ended_by: str
+    """``quit`` (Esc, closing the window, Ctrl-C, a signal), ``seconds`` (the simulated-time
+    limit), ``program`` (the control program exited) or ``timeout`` (the wall-clock limit)."""
+    program_status: int | None = None
+    """The control program's exit status, if it ended the run."""
+    program_started: bool = False
+
+    @property
+    def exit_status(self) -> int:
+        """What ``simmer run`` exits with: the program's own status when it ended the run,
+        :data:`~simmer.lockstep.EXIT_TIMEOUT` or (with a program) :data:`~simmer.lockstep.
+        EXIT_SECONDS` when a limit did, 0 otherwise."""
+        if self.ended_by == "program":
+            return self.program_status or 0
+        if self.ended_by == "timeout":
+            return EXIT_TIMEOUT
+        if self.ended_by == "seconds" and self.program_started:
+            return EXIT_SECONDS
+        return 0
+
+
 def serve(
     sim: Simulation,
     *,
@@ -77,15 +107,25 @@ def serve(
     serial: bool = False,
     serial_link: Path | None = None,
     echo: Callable[[str], None] = print,
-) -> Runner:
+    program: str | None = None,
+    lockstep: bool = False,
+    link_delay: float | None = None,
+    timeout: float | None = None,
+) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
-    Ctrl-C, SIGTERM, SIGHUP) or ``seconds`` of simulated time pass, with a window or headless.
+    Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
+    program's command line, started here on this run's ports) exits, or ``timeout`` wall
+    seconds pass; with a window or headless, in real time or in ``lockstep``.
 
-    Raises ``OSError`` if a port cannot be opened and :class:`~simmer.errors.SimmerError` if
-    no window can be opened or something is already at ``serial_link``. Returns the runner
-    (its history, for callers and tests).
+    Raises ``OSError`` if a port cannot be opened or the program cannot be started, and
+    :class:`~simmer.errors.SimmerError` if no window can be opened or something is already at
+    ``serial_link``.
     """
-    runner = Runner(sim, speed=speed)
+    runner = Runner(sim, speed=speed, lockstep=lockstep, link_delay=link_delay)
+    outcome = Outcome.attach(sim)
+    stop = threading.Event()
+    ended: list[str] = []  # who stopped the run first
+    started: Program | None = None
     restore_signals = _stop_on_signals()
     try:
         link = Link(
@@ -101,17 +141,65 @@ def serve(
         with link:
             for line in link.describe():
                 echo(line)
+            if lockstep:
+                echo(
+                    f"lockstep clock: simulated time advances only when the program sleeps, "
+                    f"and {runner.link_delay:g} s per message"
+                )
+            if program is not None:
+                started = _start_program(program, link, stop, ended, timeout, echo)
             if window:
                 from simmer.ui import run_window
 
-                run_window(runner, until=seconds, echo=echo)
+                run_window(runner, until=seconds, stop=stop, echo=echo)
             else:
                 pace = "as fast as possible" if speed is None else f"{speed:g}x real time"
                 echo(f"running headless, {pace}; Ctrl-C to stop")
-                runner.run(until=seconds)
+                runner.run(stop_event=stop, until=seconds)
+            if not ended:
+                limit = seconds is not None and sim.time >= seconds - 1e-9
+                ended.append("seconds" if limit else "quit")
     except KeyboardInterrupt:
         echo("stopped")
+        ended.append("quit")
     finally:
         runner.bus.close()
+        if started is not None:
+            started.stop()
         restore_signals()
-    return runner
+    status = started.process.returncode if started is not None and ended[0] == "program" else None
+    return Served(runner, outcome, ended[0], status, program_started=started is not None)
+
+
+def _start_program(
+    command: str,
+    link: Link,
+    stop: threading.Event,
+    ended: list[str],
+    timeout: float | None,
+    echo: Callable[[str], None],
+) -> Program:
+    """Start the control program on this run's ports; a thread ends the run when it exits or
+    at the wall-clock ``timeout`` (then stopping its whole process tree)."""
+    ports = {
+        "port_rx": link.two_port.port_rx,
+        "port_tx": link.two_port.port_tx,
+        "stream": link.stream.port,
+    }
+    env = program_environment(ports, link.host)
+    if link.serial is not None:
+        env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
+    program = Program.start(command, env)
+    echo(f"started the program: {command}")
+
+    def watch() -> None:
+        status = program.wait(timeout)
+        if status is None:
+            ended.append("timeout")
+            program.stop()
+        else:
+            ended.append("program")
+        stop.set()
+
+    threading.Thread(target=watch, name="simmer-program", daemon=True).start()
+    return program

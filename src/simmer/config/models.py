@@ -21,6 +21,7 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.errors import ConfigIssue
+from simmer.ports import PORT_RX, PORT_TX
 
 Point = tuple[float, float]
 
@@ -93,8 +94,8 @@ class Settings(BaseModel):
     )
     # Network
     host: str = Field("127.0.0.1", description="Address to listen on (this machine only).")
-    port_rx: Whole = Field(61200, ge=1, le=65535, description="SimMeR TCP: commands arrive here.")
-    port_tx: Whole = Field(61201, ge=1, le=65535, description="SimMeR TCP: replies leave here.")
+    port_rx: Whole = Field(PORT_RX, ge=1, le=65535, description="SimMeR TCP: commands arrive here.")
+    port_tx: Whole = Field(PORT_TX, ge=1, le=65535, description="SimMeR TCP: replies leave here.")
     timeout: float = Field(
         300.0,
         gt=0,

@@ -4,10 +4,11 @@ loop (:mod:`simmer.runner`) owns the simulation and also drives the TCP sockets 
 watched through the bus), while the serial port has a thread that only reads, decodes and
 queues. :class:`Link` starts the transports a run asks for."""
 
+from simmer.ports import STREAM_PORT
 from simmer.transport.bus import BusClosed, CommandBus, Request
 from simmer.transport.link import Link, is_loopback
 from simmer.transport.serial_pty import SerialServer
-from simmer.transport.tcp import STREAM_PORT, StreamServer, TwoPortServer
+from simmer.transport.tcp import StreamServer, TwoPortServer
 
 __all__ = [
     "STREAM_PORT",

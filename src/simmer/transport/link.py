@@ -8,10 +8,11 @@ from pathlib import Path
 
 from simmer.config.loader import describe_replies
 from simmer.config.models import SimConfig
+from simmer.ports import STREAM_PORT
 from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
-from simmer.transport.tcp import STREAM_PORT, StreamServer, TwoPortServer
+from simmer.transport.tcp import StreamServer, TwoPortServer
 
 log = logging.getLogger("simmer.transport")
 

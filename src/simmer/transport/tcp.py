@@ -34,8 +34,11 @@ import time
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future
+from dataclasses import replace
 
+from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 from simmer.protocol import (
+    CLOCK_PREFIX,
     EXPLAIN,
     MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
@@ -50,8 +53,6 @@ from simmer.transport.bus import BusClosed, CommandBus, Request
 
 log = logging.getLogger("simmer.transport")
 
-STREAM_PORT = 61202
-"""Default port of the persistent stream protocol."""
 READ = selectors.EVENT_READ
 WRITE = selectors.EVENT_WRITE
 RECV_SIZE = 65536
@@ -400,8 +401,8 @@ class TwoPortServer(_Server):
         self,
         bus: CommandBus,
         host: str = "127.0.0.1",
-        port_rx: int = 61200,
-        port_tx: int = 61201,
+        port_rx: int = PORT_RX,
+        port_tx: int = PORT_TX,
         *,
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
@@ -627,7 +628,10 @@ class _StreamConnection(_Connection):
             if line.rstrip(b"\r") == EXPLAIN:
                 self.explain_later()
             else:
-                self.submit(decode_message(line, self.stream.encoding))
+                decoded = decode_message(line, self.stream.encoding)
+                if line.startswith(CLOCK_PREFIX):
+                    decoded = replace(decoded, clock=True)
+                self.submit(decoded)
         self.rearm()
         self.update_events()
 
@@ -674,7 +678,8 @@ class _StreamConnection(_Connection):
             values, self.ended, self.last = [math.nan], True, future
         self.reasons = request.reasons
         self.close_when_sent = future is self.last
-        self.send(frame_replies(values, self.stream.width))
+        width = 8 if request.decoded.clock else self.stream.width  # a time needs float64
+        self.send(frame_replies(values, width))
 
     def explain_later(self) -> None:
         """Answer ``?`` once the message before it is answered (frames go out in order)."""

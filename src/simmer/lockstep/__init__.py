@@ -1,0 +1,125 @@
+"""Lockstep runs: a control program and the simulation share one simulated clock.
+
+``simmer run CONFIG --program "python my_robot.py"`` starts the program itself (see
+:class:`Program`) with this package's ``shim`` folder first on ``PYTHONPATH``: its
+``sitecustomize`` makes the program's ``time.sleep`` and clock reads follow simulated time and
+sends its connections to SimMeR's standard ports to this run's free ports. The simulator then
+advances only when the program asks (a sleep, or a clock read after many with nothing between)
+and by a fixed link delay per message, so the same configuration, seed and program give the
+same run on any machine and at any speed.
+
+The clock messages, on the persistent protocol (one line each, answered with a one-value frame
+holding the simulated time after it, as float64):
+
+* ``!sleep S``: advance the clock by S seconds, answer when the simulation has got there;
+* ``!idle``: advance until no drive is moving (at most 600 simulated seconds);
+* ``!time``: the clock, without advancing it; but the :data:`FREE_TIME_READS`-th read in a row
+  with no message or sleep between advances it by one step, so a program that busy-waits on
+  the clock still progresses.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from contextlib import suppress
+from dataclasses import dataclass
+from pathlib import Path
+
+from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
+
+SHIM = Path(__file__).resolve().parent / "shim"
+"""The folder whose ``sitecustomize.py`` puts a Python program on the simulated clock."""
+
+FREE_TIME_READS = 16
+"""Clock reads in a row that cost nothing; the next one advances one step (see module doc).
+Generous enough that a library's own reads inside one blocking call (pyserial reads the clock
+a few times per ``read``) never advance time, so a run does not depend on how data arrived."""
+
+STANDARD_PORTS = {"port_rx": PORT_RX, "port_tx": PORT_TX, "stream": STREAM_PORT}
+"""SimMeR's standard ports, which a lockstep program's connections are redirected from."""
+
+EXIT_SECONDS = 3
+"""``simmer run --program`` exit status when the ``--seconds`` limit of simulated time ended it."""
+EXIT_TIMEOUT = 124
+"""Exit status when the wall-clock ``--timeout`` ended it (as coreutils ``timeout`` does)."""
+
+
+def program_environment(
+    ports: Mapping[str, int], host: str = "127.0.0.1", base: Mapping[str, str] | None = None
+) -> dict[str, str]:
+    """The environment a lockstep program runs in: the shim on its path, this run's ports.
+
+    ``ports`` maps ``port_rx``, ``port_tx`` and ``stream`` to the ports this run serves on.
+    ``simmer.client`` reads ``SIMMER_HOST``, ``SIMMER_PORT``, ``SIMMER_PORT_RX`` and
+    ``SIMMER_PORT_TX``; the shim reads ``SIMMER_LOCKSTEP`` and ``SIMMER_PORT_MAP``.
+    """
+    env = dict(os.environ if base is None else base)
+    path = env.get("PYTHONPATH")
+    env["PYTHONPATH"] = str(SHIM) + (os.pathsep + path if path else "")
+    env["SIMMER_LOCKSTEP"] = f"{host}:{ports['stream']}"
+    env["SIMMER_EPOCH"] = repr(time.time())
+    env["SIMMER_PORT_MAP"] = ",".join(
+        f"{STANDARD_PORTS[name]}={port}" for name, port in ports.items()
+    )
+    env["SIMMER_HOST"] = host
+    env["SIMMER_PORT"] = str(ports["stream"])
+    env["SIMMER_PORT_RX"] = str(ports["port_rx"])
+    env["SIMMER_PORT_TX"] = str(ports["port_tx"])
+    env["PYTHONUNBUFFERED"] = "1"  # the program's printout appears as it happens
+    return env
+
+
+def split_command(command: str | Sequence[str]) -> list[str]:
+    """A program's command line as arguments; ``python`` means this Python (the venv's)."""
+    args = (
+        shlex.split(command, posix=os.name != "nt") if isinstance(command, str) else list(command)
+    )
+    if not args:
+        raise ValueError("the program's command line is empty")
+    if args[0] in ("python", "python3"):
+        args[0] = sys.executable
+    return args
+
+
+@dataclass
+class Program:
+    """A control program started for a run, in a session of its own so that the whole process
+    tree can be stopped; its standard input, output and error are the run's own."""
+
+    process: subprocess.Popen[bytes]
+
+    @classmethod
+    def start(cls, command: str | Sequence[str], env: Mapping[str, str]) -> Program:
+        """Start ``command`` (raises ``OSError`` if it cannot be started)."""
+        process = subprocess.Popen(split_command(command), env=dict(env), start_new_session=True)
+        return cls(process)
+
+    def wait(self, timeout: float | None = None) -> int | None:
+        """The exit status once the program has exited (None if still running at ``timeout``)."""
+        try:
+            return self.process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            return None
+
+    def stop(self, grace: float = 2.0) -> int:
+        """Stop the program and everything it started: SIGTERM, then SIGKILL after ``grace`` s."""
+        if self.process.poll() is None:
+            self._signal(kill=False)
+            if self.wait(grace) is None:
+                self._signal(kill=True)
+        self._signal(kill=True)  # children left behind by a program that exited
+        return self.process.wait()
+
+    def _signal(self, *, kill: bool) -> None:
+        if os.name == "nt":  # no process groups there: stop the program itself
+            with suppress(OSError):
+                self.process.kill() if kill else self.process.terminate()
+            return
+        with suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.process.pid, signal.SIGKILL if kill else signal.SIGTERM)

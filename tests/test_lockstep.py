@@ -1,0 +1,182 @@
+"""The lockstep clock (issue 10): the same configuration, seed and program give the same run
+through every transport, at any speed, while the machine is busy."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from simmer import Simulation
+from simmer.client import Client
+from simmer.serve import serve
+from simmer.transport.local import LocalLink
+from simmer.world.events import CommandEvent, Event, StepEvent
+
+from helpers import EXAMPLES, REPO, default_data, make_config
+
+pytestmark = pytest.mark.timeout(180)
+
+PROGRAM = REPO / "tests" / "fixtures" / "lockstep" / "program.py"
+sys.path.insert(0, str(PROGRAM.parent))
+from program import drive_around  # noqa: E402
+
+
+def noisy_sim() -> Simulation:
+    """The default rover with noisy drives and sensors, seeded."""
+    data = default_data()
+    for sensor in data["sensors"].values():
+        sensor["error"] = 0.05
+    data["drives"]["w0"]["error"] = {"x": 0.02, "y": 0.05, "rotation": 1}
+    data["drives"]["r0"]["error"] = {"x": 0.003, "y": 0.003, "rotation": 0.02}
+    return Simulation(make_config(data), seed=17)
+
+
+class Fingerprint:
+    """A hash of every command, reply and pose, with the simulated time of each."""
+
+    def __init__(self, sim: Simulation) -> None:
+        self.digest = hashlib.sha256()
+        self.steps = 0
+        sim.add_observer(self)
+
+    def __call__(self, event: Event) -> None:
+        if isinstance(event, CommandEvent):
+            self.digest.update(repr((event.time, event.message, event.replies)).encode())
+        elif isinstance(event, StepEvent):
+            self.steps += 1
+            self.digest.update(repr((event.time, tuple(event.pose))).encode())
+
+    def hexdigest(self) -> str:
+        return self.digest.hexdigest()
+
+
+def served_run(transport: str, speed: float | None = None) -> tuple[str, Any]:
+    """Run the program through ``transport`` under ``simmer run``'s lockstep clock."""
+    sim = noisy_sim()
+    fingerprint = Fingerprint(sim)
+    served = serve(
+        sim,
+        window=False,
+        speed=speed,
+        port_rx=0,
+        port_tx=0,
+        stream_port=0,
+        serial=transport == "serial",
+        echo=lambda _line: None,
+        program=f"{sys.executable} {PROGRAM} {transport}",
+        lockstep=True,
+        timeout=120,
+    )
+    assert served.ended_by == "program"
+    assert served.exit_status == 0
+    return fingerprint.hexdigest(), served.outcome.report()
+
+
+def local_run() -> tuple[str, Any]:
+    """The same program in this process, through the Python API."""
+    sim = noisy_sim()
+    fingerprint = Fingerprint(sim)
+    link = LocalLink(sim)
+    robot = Client(link, lockstep=True)
+    drive_around(robot, robot.sleep, lambda: link.clock("!time"))
+    from simmer.world.outcome import Outcome
+
+    return fingerprint.hexdigest(), Outcome(sim)
+
+
+@pytest.fixture
+def busy_cpu() -> Any:
+    """Another process keeping a CPU busy while the runs go on."""
+    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    yield
+    hog.kill()
+    hog.wait()
+
+
+def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> None:
+    runs = {
+        transport: [served_run(transport)[0] for _ in range(3)]
+        for transport in ("stream", "two-port", "serial")
+    }
+    runs["python"] = [local_run()[0] for _ in range(3)]
+    hashes = {digest for digests in runs.values() for digest in digests}
+    assert len(hashes) == 1, runs
+
+
+def test_speed_does_not_change_the_run() -> None:
+    assert served_run("stream", speed=None)[0] == served_run("stream", speed=50.0)[0]
+
+
+def test_sleep_advances_exactly_and_clock_reads_are_free() -> None:
+    sim = Simulation.from_config()
+    link = LocalLink(sim)
+    assert link.clock("!sleep 0.1") == pytest.approx(0.1)
+    assert sim.frame == 6
+    assert [link.clock("!time") for _ in range(16)] == [pytest.approx(0.1)] * 16
+    assert sim.frame == 6  # sixteen reads in a row cost nothing
+    assert link.clock("!time") == pytest.approx(0.1 + sim.dt)  # the seventeenth moves on
+    assert link.exchange("u0") == [39.5]
+    assert sim.frame == 8  # a message costs one step (the link delay)
+    assert link.clock("!sleep 0.01") > sim.time - 1e-9  # a fraction of a step accumulates
+    assert math.isnan(link.exchange("!sleep -1")[0])
+
+
+def test_idle_waits_for_the_drives() -> None:
+    sim = Simulation.from_config()
+    link = LocalLink(sim)
+    assert link.exchange("w0-12") == [math.inf]
+    finished = link.clock("!idle")
+    assert not sim.robot.any_drive_moving
+    assert finished == pytest.approx(2.0 + sim.dt, abs=2 * sim.dt)
+
+
+def test_dead_reckoning_under_the_lockstep_clock_is_the_same_at_every_speed() -> None:
+    reports = []
+    for speed in (None, 20.0, None):
+        sim = Simulation.from_config()
+        served = serve(
+            sim,
+            window=False,
+            speed=speed,
+            port_rx=0,
+            port_tx=0,
+            stream_port=0,
+            echo=lambda _line: None,
+            program=f"{sys.executable} {EXAMPLES / 'dead_reckoning.py'}",
+            lockstep=True,
+            timeout=120,
+        )
+        assert served.exit_status == 0
+        reports.append(served.outcome.report())
+    first = reports[0]
+    assert first.reached
+    assert first.task2_time == pytest.approx(23.05, rel=0.10)  # the real-time run's
+    assert all(report == first for report in reports)
+
+
+def test_the_cli_says_how_a_program_run_ended(tmp_path: Path) -> None:
+    script = tmp_path / "quits.py"
+    script.write_text("import time\ntime.sleep(1.5)\nraise SystemExit(5)\n")
+    command = [sys.executable, "-m", "simmer", "run", "--headless", "--program",
+               f"{sys.executable} {script}"]  # fmt: skip
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 5, result.stdout + result.stderr
+    assert "the program exited with status 5" in result.stdout
+    limited = subprocess.run(
+        [*command, "--seconds", "1"], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert limited.returncode == 3, limited.stdout + limited.stderr
+    hang = tmp_path / "hangs.py"
+    hang.write_text("import threading\nthreading.Event().wait()\n")  # never sleeps: hangs
+    timed = subprocess.run(
+        [sys.executable, "-m", "simmer", "run", "--headless", "--timeout", "2", "--program",
+         f"{sys.executable} {hang}"],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert timed.returncode == 124, timed.stdout + timed.stderr
