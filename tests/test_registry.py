@@ -5,6 +5,9 @@ from __future__ import annotations
 import math
 import re
 import shutil
+import sys
+from collections.abc import Iterator
+from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +19,9 @@ from simmer.devices import (
     World,
     check_device_kind,
     device_kinds,
+    get_device_kind,
     register_device_kind,
+    registry,
 )
 from simmer.errors import ConfigError, DeviceKindError
 
@@ -140,3 +145,62 @@ def test_configuration_reference_is_up_to_date() -> None:
 
     committed = (REPO / "docs" / "configuration.md").read_text(encoding="utf-8")
     assert committed == reference_markdown(), "run: simmer keys --markdown > docs/configuration.md"
+
+
+LAZY_KIND = """
+from simmer.devices import Device, World
+
+
+class Lazy(Device):
+    def simulate(self, value: float, world: World) -> float:
+        return 7.0
+"""
+
+
+@pytest.fixture
+def own_registry(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[Path]:
+    """A registry this test may change, and a folder on sys.path; both restored afterwards
+    (with the modules imported from that folder)."""
+    monkeypatch.setattr(registry, "_KINDS", dict(registry._KINDS))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    yield tmp_path
+    for name, module in list(sys.modules.items()):
+        if Path(getattr(module, "__file__", None) or "/").is_relative_to(tmp_path):
+            del sys.modules[name]
+
+
+def test_a_kind_registered_by_name_is_imported_on_first_use(own_registry: Path) -> None:
+    (own_registry / "test_lazy_kinds.py").write_text(LAZY_KIND)
+    assert register_device_kind("test_lazy", "test_lazy_kinds:Lazy") == "test_lazy_kinds:Lazy"
+    assert "test_lazy_kinds" not in sys.modules
+    kind = get_device_kind("test_lazy")
+    assert kind is not None
+    assert kind.__name__ == "Lazy"
+    assert kind.kind == "test_lazy"
+    assert get_device_kind("test_lazy") is kind
+    register_device_kind("test_lazy", "test_lazy_kinds:Lazy")  # the same class again: fine
+    with pytest.raises(DeviceKindError, match="already registered by test_lazy_kinds:Lazy"):
+        register_device_kind("test_lazy", "test_lazy_kinds:Other")
+
+
+def test_a_kind_that_cannot_be_imported_says_which(own_registry: Path) -> None:
+    register_device_kind("test_missing", "test_no_such_module:Gone")
+    register_device_kind("test_not_a_device", "math:pi")
+    with pytest.raises(DeviceKindError, match="'test_missing': cannot import test_no_such_mod"):
+        get_device_kind("test_missing")
+    with pytest.raises(DeviceKindError, match=r"3\.14.* is not a subclass of simmer\.devices"):
+        get_device_kind("test_not_a_device")
+
+
+def test_installed_kinds_are_imported_on_first_use(
+    own_registry: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (own_registry / "test_installed_kinds.py").write_text(LAZY_KIND)
+    found = [EntryPoint("test_installed", "test_installed_kinds:Lazy", registry.ENTRY_POINT_GROUP)]
+    monkeypatch.setattr(registry, "entry_points", lambda group: found)
+    monkeypatch.setattr(registry, "_ENTRY_POINTS_LOADED", False)
+    assert get_device_kind("motor") is not None
+    assert "test_installed_kinds" not in sys.modules
+    kind = get_device_kind("test_installed")
+    assert kind is not None
+    assert kind.kind == "test_installed"

@@ -23,6 +23,11 @@ the device's ``position_global`` and ``rotation_global`` are set, ``import confi
 gives the running configuration's settings (and ``maze_dim_x``, ``maze_dim_y``), and
 ``import utilities`` the original's helpers (:mod:`simmer.compat.utilities`). Drawing methods
 (``draw``, ``draw_measurement``) are not called.
+
+The registry imports this module when a configuration first names the kind. A simulation holding
+such a device pickles (for a process pool's workers): the user's object goes as its attributes,
+and the other process imports the file again and restores the object without calling
+``__init__``.
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from pydantic import ConfigDict, Field, ValidationInfo, field_validator
 
 from simmer.compat import utilities
 from simmer.compat.standins import StandIns, Vector2
-from simmer.devices import Device, DeviceParams, Drive, Motor, World, register_device_kind
+from simmer.devices import Device, DeviceParams, Drive, Motor, World
 from simmer.devices.base import Category
 from simmer.errors import CommandError, describe_exception
 
@@ -346,18 +351,36 @@ class SimmerDevice(Device):
         self.info |= {
             k: _plain(v) for k, v in params.model_dump(exclude_unset=True).items() if k not in skip
         }
-        self.user_class: type | None = None
         self.loaded: LoadedModule | None = None
         self.instance: Any = None
+        self.unpickled: dict[str, Any] | None = None
+        """The user's object's attributes, from a pickle, until the object is built again."""
         self.environment: Environment | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle without the user's module, which no other process can import by its name
+        (``devices.<name>`` exists only while it loads), nor the views of the world: they are
+        made again on first use. The user's object is carried as its attributes."""
+        state = self.__dict__.copy()
+        if self.instance is not None:
+            state["unpickled"] = vars(self.instance)
+        state.update(loaded=None, instance=None, environment=None)
+        return state
 
     def _prepare(self, world: World) -> tuple[Any, Environment]:
         """Build the user's object on first use; refresh its global pose and the time."""
-        if self.instance is None or self.environment is None or self.loaded is None:
+        if self.loaded is None:
             self.loaded = load_module(Path(self.settings.module))
             self.loaded.config.__dict__.update(config_values(world))
-            self.user_class = getattr(self.loaded.module, self.settings.class_name)
-            self.instance = self.user_class(dict(self.info))
+        if self.instance is None:
+            user_class = getattr(self.loaded.module, self.settings.class_name)
+            if self.unpickled is None:
+                self.instance = user_class(dict(self.info))
+            else:  # from a pickle: the same object, without running __init__ again
+                self.instance = user_class.__new__(user_class)
+                vars(self.instance).update(self.unpickled)
+                self.unpickled = None
+        if self.environment is None:
             self.environment = Environment(world)
         pose = self.world_pose(world.robot.pose)
         self.instance.position_global = Vector2(pose.x, pose.y)
@@ -388,7 +411,5 @@ class SimmerDevice(Device):
         if hasattr(instance, "update"):
             instance.update(environment)
 
-
-register_device_kind(KIND, SimmerDevice)
 
 __all__ = ["KIND", "Environment", "SimmerDevice", "SimmerDeviceParams"]

@@ -42,8 +42,8 @@ from typing import Any
 
 from simmer.compat import template
 from simmer.compat.standins import StandInDevice, StandIns, Vector2, builtin_kind, captured_info
-from simmer.config.loader import DEFAULT_KIND, config_from_dict, oversize_walls
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
+from simmer.config.validate import DEFAULT_KIND, config_from_dict, oversize_walls
 from simmer.errors import ConfigError, ConfigIssue, describe_exception
 
 log = logging.getLogger(__name__)

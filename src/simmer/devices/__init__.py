@@ -1,4 +1,4 @@
-"""Device kinds and their registry. Built-in kinds are registered on import."""
+"""Device kinds and their registry (built-in kinds are imported on first use, by name)."""
 
 from simmer.devices.base import (
     Circle,
@@ -10,6 +10,7 @@ from simmer.devices.base import (
 )
 from simmer.devices.drive import Axes, Drive, DriveParams, Motion
 from simmer.devices.motor import Motor, MotorParams
+from simmer.devices.plugins import install_finder
 from simmer.devices.registry import (
     check_device_kind,
     device_kinds,
@@ -27,15 +28,8 @@ from simmer.devices.sensors import (
     UltrasonicParams,
 )
 
-register_device_kind("motor", Motor)
-register_device_kind("drive", Drive)
-register_device_kind("ultrasonic", Ultrasonic)
-register_device_kind("gyroscope", Gyroscope)
-register_device_kind("compass", Compass)
-register_device_kind("infrared", Infrared)
-
-# "simmer_device": a device class written for the original SimMeR (registers itself on import)
-import simmer.compat.template  # noqa: E402, F401
+# a pickled plug-in class names a simmer_plugin_... module, which the finder imports again
+install_finder()
 
 __all__ = [
     "Axes",

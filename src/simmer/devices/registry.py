@@ -4,58 +4,121 @@ A configuration names a kind (``type = "ultrasonic"``); the registry finds the c
 their own kinds with :func:`register_device_kind`, from a plug-in file named in the
 configuration (``plugins = ["bumper.py"]``) or from an installed package's ``simmer.devices``
 entry point; nothing in SimMeR needs editing.
+
+A kind may be registered as a ``"package.module:Class"`` string (an entry point's form), imported
+on first use. The built-in kinds are registered so: the registry imports none of them itself,
+so a module defining a kind (:mod:`simmer.compat.template`) may import :mod:`simmer.devices`
+without an import cycle, and only what a configuration uses is imported.
 """
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from collections.abc import Callable
 from importlib.metadata import entry_points
-from typing import TypeVar
+from typing import TypeVar, cast, overload
 
 import numpy as np
 
 from simmer.devices.base import Device, DeviceParams
 from simmer.errors import DeviceKindError
 
-_KINDS: dict[str, type[Device]] = {}
+BUILTIN_KINDS = {
+    "motor": "simmer.devices.motor:Motor",
+    "drive": "simmer.devices.drive:Drive",
+    "ultrasonic": "simmer.devices.sensors:Ultrasonic",
+    "gyroscope": "simmer.devices.sensors:Gyroscope",
+    "compass": "simmer.devices.sensors:Compass",
+    "infrared": "simmer.devices.sensors:Infrared",
+    # a device class written for the original SimMeR
+    "simmer_device": "simmer.compat.template:SimmerDevice",
+}
+"""SimMeR's own kinds: name -> ``"module:Class"``."""
+
+_KINDS: dict[str, type[Device] | str] = dict(BUILTIN_KINDS)
+"""Every registered kind: its class, or its ``"module:Class"`` string until first used."""
 _ENTRY_POINTS_LOADED = False
 ENTRY_POINT_GROUP = "simmer.devices"
 
 D = TypeVar("D", bound=type[Device])
 
 
+@overload
 def register_device_kind(
-    name: str, cls: type[Device] | None = None, *, replace: bool = False
-) -> Callable[[D], D] | type[Device]:
+    name: str, cls: None = None, *, replace: bool = False
+) -> Callable[[D], D]: ...
+
+
+@overload
+def register_device_kind(name: str, cls: D, *, replace: bool = False) -> D: ...
+
+
+@overload
+def register_device_kind(name: str, cls: str, *, replace: bool = False) -> str: ...
+
+
+def register_device_kind(
+    name: str, cls: type[Device] | str | None = None, *, replace: bool = False
+) -> Callable[[D], D] | type[Device] | str:
     """Register ``cls`` as device kind ``name``; usable as a call or a class decorator.
 
+    ``cls`` may be a ``"package.module:Class"`` string, imported when the kind is first used.
     A second registration under one name is an error unless it is the same class (a module
     imported twice) or ``replace=True``.
     """
 
     def _register(kind_cls: D) -> D:
         check_device_kind(kind_cls)
-        existing = _KINDS.get(name)
-        if existing is not None and not replace and _qualname(existing) != _qualname(kind_cls):
-            raise DeviceKindError(
-                f"device kind {name!r} is already registered by {_qualname(existing)}; "
-                f"choose another name for {_qualname(kind_cls)}"
-            )
+        _claim(name, kind_cls, replace)
         kind_cls.kind = name
         _KINDS[name] = kind_cls
         return kind_cls
 
     if cls is None:
         return _register
+    if isinstance(cls, str):
+        _claim(name, cls, replace)
+        _KINDS[name] = cls
+        return cls
     return _register(cls)
 
 
-def _qualname(cls: type) -> str:
-    return f"{cls.__module__}.{cls.__qualname__}"
+def _claim(name: str, new: type[Device] | str, replace: bool) -> None:
+    """Refuse ``new`` under ``name`` if another class holds the name (unless ``replace``)."""
+    existing = _KINDS.get(name)
+    if existing is not None and not replace and _target(existing) != _target(new):
+        raise DeviceKindError(
+            f"device kind {name!r} is already registered by {_target(existing)}; "
+            f"choose another name for {_target(new)}"
+        )
 
 
-def check_device_kind(cls: type) -> None:
+def _target(cls: type[Device] | str) -> str:
+    """Where a kind's class lives, as ``"module:Class"``."""
+    return cls if isinstance(cls, str) else f"{cls.__module__}:{cls.__qualname__}"
+
+
+def _resolve(name: str) -> type[Device] | None:
+    """The class registered as ``name``, imported and checked now if registered as a string."""
+    entry = _KINDS.get(name)
+    if not isinstance(entry, str):
+        return entry
+    module_name, _, qualname = entry.partition(":")
+    try:
+        found: object = importlib.import_module(module_name)
+        for part in qualname.split("."):
+            found = getattr(found, part)
+    except (ImportError, AttributeError) as exc:
+        raise DeviceKindError(f"device kind {name!r}: cannot import {entry}: {exc}") from exc
+    check_device_kind(found)  # raises unless it is a Device subclass
+    kind_cls = cast(type[Device], found)
+    kind_cls.kind = name
+    _KINDS[name] = kind_cls
+    return kind_cls
+
+
+def check_device_kind(cls: object) -> None:
     """Raise :class:`DeviceKindError` unless ``cls`` honours the device interface."""
     problems: list[str] = []
     if not (inspect.isclass(cls) and issubclass(cls, Device)):
@@ -74,26 +137,27 @@ def check_device_kind(cls: type) -> None:
     if outline.ndim != 2 or outline.shape[1] != 2 or outline.shape[0] < 3:
         problems.append("default_outline must be an array of at least 3 (x, y) points")
     if problems:
-        raise DeviceKindError(f"device kind {_qualname(cls)} is not usable: " + "; ".join(problems))
+        raise DeviceKindError(f"device kind {_target(cls)} is not usable: " + "; ".join(problems))
 
 
 def device_kinds() -> dict[str, type[Device]]:
     """Every registered kind by name (built-ins, plug-ins, installed entry points)."""
     _load_entry_points()
-    return dict(_KINDS)
+    found = {name: _resolve(name) for name in list(_KINDS)}
+    return {name: cls for name, cls in found.items() if cls is not None}
 
 
 def get_device_kind(name: str) -> type[Device] | None:
     """The kind registered as ``name``, or None."""
     _load_entry_points()
-    return _KINDS.get(name)
+    return _resolve(name)
 
 
 def _load_entry_points() -> None:
+    """Register installed packages' kinds (once per process), as strings imported on use."""
     global _ENTRY_POINTS_LOADED  # noqa: PLW0603 - load installed plug-ins once per process
     if _ENTRY_POINTS_LOADED:
         return
     _ENTRY_POINTS_LOADED = True
     for ep in entry_points(group=ENTRY_POINT_GROUP):
-        cls = ep.load()
-        register_device_kind(ep.name, cls)
+        register_device_kind(ep.name, f"{ep.module}:{ep.attr}")
