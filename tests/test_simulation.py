@@ -11,7 +11,14 @@ from typing import Any
 import pytest
 
 from simmer import Simulation
-from simmer.world import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
+from simmer.world import (
+    CollisionEndEvent,
+    CollisionEvent,
+    CommandEvent,
+    Event,
+    ResetEvent,
+    StepEvent,
+)
 
 from helpers import EXAMPLES, LAB_SEQUENCE, default_data, make_sim, run_sequence
 
@@ -120,7 +127,7 @@ def test_observers_see_commands_steps_collisions_and_resets() -> None:
     sim.run_until_idle()
     sim.reset()
     kinds = {type(e) for e in events}
-    assert kinds == {CommandEvent, StepEvent, CollisionEvent, ResetEvent}
+    assert kinds == {CommandEvent, StepEvent, CollisionEvent, CollisionEndEvent, ResetEvent}
     command = next(e for e in events if isinstance(e, CommandEvent))
     assert (command.message, command.replies) == ("w0-60", (math.inf,))
     assert sum(isinstance(e, CollisionEvent) for e in events) == 1

@@ -30,6 +30,7 @@ from simmer.lockstep import FREE_TIME_READS
 from simmer.protocol import parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
+from simmer.world.events import RunEvent
 
 log = logging.getLogger("simmer.runner")
 
@@ -87,7 +88,7 @@ class Runner:
     ) -> None:
         self.sim = sim
         self.bus = bus if bus is not None else CommandBus()
-        self.paused = False
+        self._paused = False
         self.history: deque[Exchange] = deque(maxlen=history)
         self._speed: float | None = None
         self._reschedule = True
@@ -114,6 +115,22 @@ class Runner:
             raise ValueError(f"speed must be a positive number or None (max), not {value!r}")
         self._speed = value
         self._reschedule = True
+        if self.sim.observers:
+            sim = self.sim
+            rate = math.nan if value is None else value
+            sim.emit(RunEvent(sim.time, "speed", rate, sim.frame))
+
+    @property
+    def paused(self) -> bool:
+        """True while the loop does not step (commands are still answered). Settable."""
+        return self._paused
+
+    @paused.setter
+    def paused(self, value: bool) -> None:
+        if value != self._paused and self.sim.observers:
+            sim = self.sim
+            sim.emit(RunEvent(sim.time, "pause" if value else "resume", 0.0, sim.frame))
+        self._paused = value
 
     @property
     def clients(self) -> list[str]:
@@ -143,7 +160,7 @@ class Runner:
             message = f"<{decoded.error}>"
         else:
             records: list[tuple[int, str]] = []
-            replies = self.sim.command(decoded.text, records)
+            replies = self.sim.command(decoded.text, records, request.client)
             message = decoded.text
             self._report(printable(request.client), records, request.reasons)
         self.history.append(Exchange(self.sim.time, request.client, message, tuple(replies)))
@@ -162,6 +179,9 @@ class Runner:
             request.future.set_result([math.nan])
             return
         sim = self.sim
+        if sim.observers:
+            asked = clock.seconds if clock.kind == "sleep" else math.nan
+            sim.emit(RunEvent(sim.time, "clock", asked, sim.frame, clock.kind))
         if not self.lockstep:
             if clock.kind == "sleep":
                 self._waits.append(_Wait(request, sim.time + clock.seconds))

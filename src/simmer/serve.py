@@ -17,6 +17,7 @@ from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environ
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Link
 from simmer.world import Simulation
+from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
 
 log = logging.getLogger("simmer.serve")
@@ -148,6 +149,7 @@ def serve(
                 )
             if program is not None:
                 started = _start_program(program, link, stop, ended, timeout, echo)
+                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
                 from simmer.ui import run_window
 
@@ -168,6 +170,8 @@ def serve(
             started.stop()
         restore_signals()
     status = started.process.returncode if started is not None and ended[0] == "program" else None
+    if status is not None:  # here, in the thread that owns the simulation
+        sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.frame))
     return Served(runner, outcome, ended[0], status, program_started=started is not None)
 
 

@@ -1,4 +1,14 @@
-"""Events the simulation reports to its observers (traces, video, HUD, reports)."""
+"""One stream of events: every input to a run and every outcome, in simulated time.
+
+Each event carries the simulated ``time`` and the ``step`` number (steps done so far) at which
+it happened. Inputs (:data:`INPUTS`: commands with the client they came from, manual keys,
+placing the robot, resets) are everything a run depends on besides its configuration and seed,
+so feeding them back into a fresh simulation reproduces every reply and pose
+(:func:`simmer.world.replay.replay`). Outcomes (replies, collisions starting and ending, the
+block reached) and what the loop around the simulation did (pause, speed, clock advances, a
+control program starting and exiting) are events too, so the heads-up display, the outcome,
+recordings and sweeps are all observers of the one stream.
+"""
 
 from __future__ import annotations
 
@@ -15,6 +25,9 @@ class CommandEvent:
     time: float
     message: str
     replies: tuple[float, ...]
+    step: int = 0
+    client: str = ""
+    """Who sent it (``stream 127.0.0.1:50312``), "" from Python."""
 
 
 @dataclass(frozen=True)
@@ -23,6 +36,7 @@ class StepEvent:
 
     time: float
     pose: Pose
+    step: int = 0
 
 
 @dataclass(frozen=True)
@@ -31,6 +45,16 @@ class CollisionEvent:
 
     time: float
     pose: Pose
+    step: int = 0
+
+
+@dataclass(frozen=True)
+class CollisionEndEvent:
+    """The robot moved again after a collision (its first unblocked step)."""
+
+    time: float
+    pose: Pose
+    step: int = 0
 
 
 @dataclass(frozen=True)
@@ -38,7 +62,62 @@ class ResetEvent:
     """The simulation went back to its start."""
 
     time: float
+    step: int = 0
 
 
-Event = CommandEvent | StepEvent | CollisionEvent | ResetEvent
+@dataclass(frozen=True)
+class KeysEvent:
+    """The manual-driving keys held changed (the window's W A S D Q E)."""
+
+    time: float
+    keys: frozenset[str]
+    step: int = 0
+
+
+@dataclass(frozen=True)
+class PlaceEvent:
+    """The robot was put somewhere by hand (dragged or turned with the mouse)."""
+
+    time: float
+    pose: Pose
+    step: int = 0
+
+
+@dataclass(frozen=True)
+class ReachedEvent:
+    """The robot reached the block (the Task 2 stopwatch stops)."""
+
+    time: float
+    task2_time: float
+    step: int = 0
+
+
+@dataclass(frozen=True)
+class RunEvent:
+    """Something the loop around the simulation did: ``pause``, ``resume``, ``speed``
+    (``value`` the new multiple of real time, NaN for as fast as possible), ``clock`` (a clock
+    message: ``value`` the seconds asked, NaN for idle), ``program-start`` or ``program-exit``
+    (``value`` its exit status)."""
+
+    time: float
+    what: str
+    value: float = 0.0
+    step: int = 0
+    detail: str = ""
+
+
+Event = (
+    CommandEvent
+    | StepEvent
+    | CollisionEvent
+    | CollisionEndEvent
+    | ResetEvent
+    | KeysEvent
+    | PlaceEvent
+    | ReachedEvent
+    | RunEvent
+)
 Observer = Callable[[Event], None]
+
+INPUTS = (CommandEvent, KeysEvent, PlaceEvent, ResetEvent)
+"""The events a run's result depends on (with its configuration and seed)."""

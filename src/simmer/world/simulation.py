@@ -24,10 +24,13 @@ from simmer.errors import CommandError, DeviceKindError, describe_exception
 from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
 from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message, printable
 from simmer.world.events import (
+    CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
     Event,
+    KeysEvent,
     Observer,
+    PlaceEvent,
     ResetEvent,
     StepEvent,
 )
@@ -153,12 +156,14 @@ class Simulation:
 
     # ----------------------------------------------------------------- commands
 
-    def command(self, message: str, reasons: list[tuple[int, str]] | None = None) -> list[float]:
+    def command(
+        self, message: str, reasons: list[tuple[int, str]] | None = None, client: str = ""
+    ) -> list[float]:
         """Execute a message such as ``"w0-6,u0"``; one reply value per command, in order.
 
         A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
         an unknown device answers NaN and logs why (or adds it to ``reasons``, see
-        :meth:`execute`).
+        :meth:`execute`). ``client`` names the sender in the event stream.
         """
         commands = parse_message(message, lenient=self._lenient)
         for command in commands:
@@ -166,7 +171,7 @@ class Simulation:
                 self._warn_lenient(command)
         replies = [self.execute(command, reasons) for command in commands]
         if self.observers:
-            self._emit(CommandEvent(self._time, message, tuple(replies)))
+            self.emit(CommandEvent(self._time, message, tuple(replies), self.frame, client))
         return replies
 
     def _warn_lenient(self, command: Command) -> None:
@@ -306,7 +311,7 @@ class Simulation:
             except DEVICE_FAULTS as exc:
                 self._switch_off(device, "simulate() for simulate_list", exc)
         if self.observers:
-            self._emit(StepEvent(self._time, robot.pose))
+            self.emit(StepEvent(self._time, robot.pose, self.frame))
 
     # ----------------------------------------------------------------- faulty devices
 
@@ -375,9 +380,12 @@ class Simulation:
                 self.collisions += 1
                 self._was_blocked = True
                 if self.observers:
-                    self._emit(CollisionEvent(self._time, pose))
+                    self.emit(CollisionEvent(self._time, pose, self.frame))
             return
-        self._was_blocked = False
+        if self._was_blocked:
+            self._was_blocked = False
+            if self.observers:
+                self.emit(CollisionEndEvent(self._time, target, self.frame))
         robot.pose = target
         robot.turned = rotation
 
@@ -393,6 +401,8 @@ class Simulation:
         unknown = held - set(MANUAL_KEYS)
         if unknown:
             raise ValueError(f"manual keys are {MANUAL_KEYS}, not {''.join(sorted(unknown))}")
+        if held != self.manual_keys and self.observers:
+            self.emit(KeysEvent(self._time, held, self.frame))
         self.manual_keys = held
 
     def _manual_motion(self, dt: float) -> tuple[float, float, float]:
@@ -423,20 +433,29 @@ class Simulation:
         ):
             return False
         robot.pose = Pose(x, y, heading)
+        if self.observers:
+            self.emit(PlaceEvent(self._time, robot.pose, self.frame))
         return True
 
     # ----------------------------------------------------------------- lifecycle
 
     def reset(self) -> None:
         """Put robot, block, devices, time and the random generator back to the start."""
+        time, step = self._time, self.frame  # the event says when it was asked for
         self._build()
         if self.observers:
-            self._emit(ResetEvent(self._time))
+            self.emit(ResetEvent(time, step))
 
     def add_observer(self, observer: Observer) -> None:
-        """Call ``observer(event)`` for every command, step, collision and reset."""
+        """Call ``observer(event)`` for every event of the run (see :mod:`simmer.world.events`)."""
         self.observers.append(observer)
 
-    def _emit(self, event: Event) -> None:
+    def remove_observer(self, observer: Observer) -> None:
+        """Stop calling ``observer`` (no error if it was not added)."""
+        if observer in self.observers:
+            self.observers.remove(observer)
+
+    def emit(self, event: Event) -> None:
+        """Give ``event`` to every observer (the loop around the simulation adds its own)."""
         for observer in self.observers:
             observer(event)
