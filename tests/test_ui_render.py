@@ -24,9 +24,11 @@ from simmer.ui import (
     Window,
     render_scene,
 )
-from simmer.ui.hud import LIT, paint_hud
-from simmer.ui.render import merge_rects
+from simmer.ui.hud import COMMANDS_X, LIT, PATH_X, ROWS, TEXT, VALUE_X, paint_hud
+from simmer.ui.render import TextCache, merge_rects
 from simmer.ui.scene import BLACK_TILE, PANEL_HEIGHT, WHITE_TILE, default_window_size
+
+from helpers import LAB_SEQUENCE, make_sim, run_sequence
 
 SMALL = """
 walls = [[1, 1]]
@@ -254,4 +256,41 @@ def test_hud_is_painted_from_the_snapshot_alone() -> None:
     again = RecordingRenderer()
     paint_hud(again, snap)
     assert again.calls == first.calls
+    bridge.close()
+
+
+def test_hud_image_after_reaching_the_block(tmp_path: Path) -> None:
+    sim = make_sim()
+    pygame.display.init()
+    bridge = Bridge(sim)
+    window = Window(bridge, surface=pygame.Surface(default_window_size(sim)))
+    run_sequence(sim, LAB_SEQUENCE)
+    bridge.sync()
+    window.draw()
+    outcome = bridge.latest.outcome
+    assert outcome is not None
+    assert outcome.task2_time is not None
+    path = tmp_path / "hud.png"
+    width = window.screen.get_width()
+    pygame.image.save(window.screen.subsurface((0, 0, width, PANEL_HEIGHT)), str(path))
+    pixels = pygame.surfarray.array3d(pygame.image.load(str(path)))
+    font = TextCache().font(22)
+
+    def ink(x: int, row: int, color: tuple[int, int, int]) -> tuple[int, int]:
+        """First and last column drawn in exactly ``color`` in a row, from ``x`` to the
+        commands' column."""
+        band = pixels[x:COMMANDS_X, ROWS[row] : ROWS[row] + 16]
+        columns = np.flatnonzero((band == color).all(axis=-1).any(axis=1))
+        return x + int(columns[0]), x + int(columns[-1])
+
+    # The stopwatch stopped, in yellow, as wide as its text; the pose row is not highlighted.
+    watch = f"reached the block in {outcome.task2_time:.2f} s"
+    first, last = ink(VALUE_X, 1, LIT)
+    assert first - VALUE_X <= 2
+    assert last - first == pytest.approx(font.size(watch)[0], abs=4)
+    assert not (pixels[:, ROWS[2] : ROWS[2] + 16] == LIT).all(axis=-1).any()
+    # The path length beside the collisions.
+    first, last = ink(PATH_X, 3, TEXT)
+    assert last - first == pytest.approx(font.size(f"{outcome.path_length:.1f} in")[0], abs=4)
+    window.close()
     bridge.close()

@@ -25,9 +25,11 @@ from simmer.geometry import Pose
 from simmer.runner import Runner
 from simmer.transport import Link
 from simmer.ui import Bridge, Window, run_window
-from simmer.ui.bridge import Controls
-from simmer.ui.hud import Stopwatch
+from simmer.ui.bridge import Controls, PlaceRobot
+from simmer.ui.hud import LIT, TEXT, paint_hud
+from simmer.ui.render import RecordingRenderer
 from simmer.ui.window import LocalControls, faster, slower
+from simmer.world.outcome import Outcome, OutcomeReport
 
 TIMEOUT = 30.0
 """Generous seconds for anything another thread must do (never a speed assertion)."""
@@ -50,6 +52,20 @@ def tick(win: Window, controls: Controls | None = None) -> bool:
     keep = win.bridge.sync(controls) and keep
     win.draw()
     return keep
+
+
+def shown_outcome(win: Window) -> OutcomeReport:
+    """The outcome in the window's latest snapshot (what the HUD draws)."""
+    outcome = win.bridge.latest.outcome
+    assert outcome is not None
+    return outcome
+
+
+def hud_texts(win: Window) -> dict[str, object]:
+    """Each text the HUD draws for the window's latest snapshot, with its colour."""
+    r = RecordingRenderer()
+    paint_hud(r, win.bridge.latest)
+    return {str(args[0]): args[2] for args in r.of("text")}
 
 
 def key(code: int, down: bool = True, unicode: str = "") -> None:
@@ -103,7 +119,9 @@ def test_r_mid_drive_restores_the_start_and_clears_the_drive(window: Window) -> 
     tick(window)
     sim.step(5)
     assert sim.robot.pose != start
-    assert window.bridge.stopwatch.start is not None
+    tick(window)
+    assert shown_outcome(window).first_motion == 0.0
+    assert shown_outcome(window).path_length > 0
     key(pygame.K_r, unicode="r")
     tick(window)
     assert sim.robot.pose == start
@@ -111,7 +129,8 @@ def test_r_mid_drive_restores_the_start_and_clears_the_drive(window: Window) -> 
     assert not sim.robot.any_drive_moving
     assert not sim.manual_keys
     assert not window.held
-    assert window.bridge.stopwatch.elapsed() is None
+    assert shown_outcome(window) == Outcome(Simulation.from_config()).report()  # all cleared
+    assert "starts when the robot first moves" in hud_texts(window)
     sim.step(30)
     assert sim.robot.pose == start
 
@@ -210,6 +229,55 @@ def test_drag_moves_the_robot(window: Window) -> None:
     assert window.drag is None
 
 
+def test_drag_restarts_the_stopwatch_and_adds_no_path(window: Window) -> None:
+    sim = window.bridge.sim
+    sim.command("w0-3")
+    sim.run_until_idle()
+    sim.step(10)
+    tick(window)
+    assert shown_outcome(window).first_motion == 0.0
+    mouse(pygame.MOUSEBUTTONDOWN, window, 6, 39)
+    mouse(pygame.MOUSEMOTION, window, 12, 42)
+    tick(window)
+    sim.step(5)  # the simulation steps between the drag's moves
+    mouse(pygame.MOUSEMOTION, window, 18, 42)
+    mouse(pygame.MOUSEBUTTONUP, window, 18, 42)
+    tick(window)
+    sim.step(5)
+    tick(window)
+    assert (sim.robot.pose.x, sim.robot.pose.y) == pytest.approx((18, 42), abs=0.1)
+    outcome = shown_outcome(window)
+    assert outcome.first_motion is None  # starts again at the next motion
+    assert outcome.path_length == pytest.approx(3.0)  # the hand's move is not the robot's path
+    assert outcome.messages == 1
+    moved_at = sim.time
+    sim.command("w0-1")
+    sim.run_until_idle()
+    tick(window)
+    assert shown_outcome(window).first_motion == pytest.approx(moved_at)
+    assert shown_outcome(window).path_length == pytest.approx(4.0)
+
+
+def test_the_window_shows_the_outcome_a_served_run_reports() -> None:
+    sim = Simulation.from_config()
+    outcome = Outcome.attach(sim)  # as serve() does before it opens the window
+    bridge = Bridge(sim)
+    assert bridge.outcome is outcome
+    assert sim.observers.count(outcome) == 1  # the figures are counted once
+    sim.command("w0-2")
+    sim.run_until_idle()
+    bridge.sync()
+    assert bridge.latest.outcome == outcome.report()
+    bridge.close()
+    assert sim.observers == [outcome]  # the run's outcome outlives the window
+    alone = Simulation.from_config()
+    own = Bridge(alone)
+    assert isinstance(own.outcome, Outcome)
+    assert own.outcome in alone.observers
+    own.close()
+    assert not alone.observers
+
+
 def test_dragging_onto_a_wall_is_refused(window: Window) -> None:
     sim = window.bridge.sim
     start = sim.robot.pose
@@ -276,27 +344,36 @@ def test_local_controls_step_once() -> None:
     assert sim.frame == 1
 
 
-def test_stopwatch_times_the_trip_to_the_block(caplog: pytest.LogCaptureFixture) -> None:
-    sim = Simulation.from_config()
-    watch = Stopwatch(sim)
-    sim.add_observer(watch)
-    sim.step(30)
-    assert watch.elapsed() is None  # not moved yet
+def test_hud_shows_the_runs_outcome(window: Window) -> None:
+    sim = window.bridge.sim
     block = sim.block
-    # Just out of reach below the block, facing it (heading 180: up; the nose is 4 in ahead).
-    assert sim.place_robot(block.x, block.y + block.size / 2 + 1.2 + 4, 180)
-    watch.reset()
-    sim.command("w0-2")  # closes the 1.2 in gap to within 1 in, then stops 0.8 in short
-    with caplog.at_level(logging.INFO, logger="simmer.ui"):
-        sim.run_until_idle()
-    assert watch.start == pytest.approx(0.5)  # the start of the first step that moved
-    elapsed = watch.elapsed()
-    assert elapsed == pytest.approx(2 * sim.dt)  # 0.1 in per step: two steps close 0.2 in
-    assert "reached the block" in caplog.text
+    # Facing the block from below, 1.2 in short of it (heading 180: up; the nose is 4 in ahead),
+    # put there by hand: no motion, no path.
+    window.bridge.post(PlaceRobot(Pose(block.x, block.y + block.size / 2 + 1.2 + 4, 180)))
+    tick(window)
+    sim.step(30)
+    sim.command("zz")  # no such device: NaN
+    sim.command("w0-0.5")
+    sim.step()
+    tick(window)
+    texts = hud_texts(window)
+    assert texts[f"{sim.dt:.2f} s"] == TEXT  # the stopwatch runs from the first motion ...
+    assert texts["0.1 in"] == TEXT  # ... and the path grows
+    assert texts["2 replies, 1 NaN"] == TEXT
+    assert texts["0"] == TEXT  # no collisions
+    sim.run_until_idle()
     sim.step(10)
-    assert watch.elapsed() == elapsed  # frozen once stopped
-    sim.reset()
-    assert watch.elapsed() is None
+    tick(window)
+    texts = hud_texts(window)
+    assert texts[f"reached the block in {2 * sim.dt:.2f} s"] == LIT  # 1 in away after 2 steps
+    assert texts["0.5 in"] == TEXT
+    sim.command("w0--60")  # backwards into the bottom wall
+    sim.run_until_idle()
+    tick(window)
+    outcome = shown_outcome(window)
+    assert outcome.collisions == 1
+    assert outcome.first_collision is not None
+    assert f"1 (first at {outcome.first_collision:.2f} s)" in hud_texts(window)
 
 
 def test_run_window_quits_on_escape(caplog: pytest.LogCaptureFixture) -> None:

@@ -15,7 +15,6 @@ import os
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 from simmer.ui.bridge import Bridge
-from simmer.ui.hud import Stopwatch
 from simmer.ui.render import PygameRenderer, RecordingRenderer, Renderer
 from simmer.ui.scene import ScenePainter, View
 from simmer.ui.snapshot import Snapshot, StaticScene
@@ -29,7 +28,6 @@ __all__ = [
     "ScenePainter",
     "Snapshot",
     "StaticScene",
-    "Stopwatch",
     "View",
     "Window",
     "render_scene",

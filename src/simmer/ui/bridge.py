@@ -20,9 +20,11 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from simmer.geometry import FloatArray, Pose
-from simmer.ui.hud import CommandLog, Stopwatch
+from simmer.ui.hud import CommandLog
 from simmer.ui.snapshot import RobotLayout, Snapshot, StaticScene, frozen_array
 from simmer.world import Simulation
+from simmer.world.events import Observer
+from simmer.world.outcome import Outcome
 
 SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
 """The speed factors ``+`` and ``-`` step through."""
@@ -84,7 +86,8 @@ class HoldKeys:
 
 @dataclass(frozen=True)
 class Reset:
-    """Robot, block, devices, time and stopwatch back to the start; drive keys released."""
+    """Robot, block, devices, time and the run's outcome back to the start; drive keys
+    released."""
 
 
 @dataclass(frozen=True)
@@ -106,17 +109,15 @@ class ChangeSpeed:
 
 @dataclass(frozen=True)
 class PlaceRobot:
-    """Move the robot there if it fits; if not, the snapshot shows a ghost outline there."""
+    """Move the robot there if it fits (the Task 2 stopwatch then starts again at the next
+    motion); if not, the snapshot shows a ghost outline there."""
 
     pose: Pose
 
 
 @dataclass(frozen=True)
 class EndDrag:
-    """A drag that began with the robot at ``start`` ended: clear the ghost; if the robot moved,
-    restart the stopwatch."""
-
-    start: Pose
+    """A drag ended: clear the ghost outline."""
 
 
 @dataclass(frozen=True)
@@ -140,10 +141,19 @@ class Bridge:
         """Configuration and maze: safe to read from any thread."""
         self.local = LocalControls(sim)
         """Pause and speed when :meth:`sync` is called without a runner."""
-        self.stopwatch = Stopwatch(sim)
+        outcome = next((o for o in sim.observers if isinstance(o, Outcome)), None)
+        self._attached: list[Observer] = []
+        """The observers this bridge added (and removes on :meth:`close`)."""
+        if outcome is None:
+            outcome = Outcome(sim)
+            self._attached.append(outcome)
+        self.outcome = outcome
+        """The run's outcome the HUD shows: the one already following ``sim`` (a served run
+        reports the same figures at its end), else the bridge's own."""
         self.commands = CommandLog()
-        sim.add_observer(self.stopwatch)
-        sim.add_observer(self.commands)
+        self._attached.append(self.commands)
+        for observer in self._attached:
+            sim.add_observer(observer)
         self._actions: queue.SimpleQueue[Action] = queue.SimpleQueue()
         self._ghost: FloatArray | None = None
         self._robot = sim.robot
@@ -195,8 +205,7 @@ class Bridge:
             sim.set_manual_keys(action.keys)
         elif isinstance(action, Reset):
             self._ghost = None
-            sim.reset()
-            self.stopwatch.reset()
+            sim.reset()  # its ResetEvent clears the outcome
         elif isinstance(action, TogglePause):
             ctl.paused = not ctl.paused
         elif isinstance(action, StepOnce):
@@ -212,22 +221,18 @@ class Bridge:
                 self._ghost = frozen_array(sim.robot.polygon(target).copy())
         elif isinstance(action, EndDrag):
             self._ghost = None
-            if sim.robot.pose != action.start:
-                self.stopwatch.reset()
 
     def _snapshot(self, ctl: Controls) -> Snapshot:
         sim = self.sim
         if sim.robot is not self._robot:  # after a reset
             self._robot = sim.robot
             self._layout = RobotLayout.of(sim.robot)
-        watch = self.stopwatch
         return Snapshot.of(
             sim,
             self._layout,
             paused=ctl.paused,
             speed=ctl.speed,
-            watch_elapsed=watch.elapsed(),
-            watch_stopped=watch.stop is not None,
+            outcome=self.outcome.report(),
             commands=self.commands.entries,
             clients=ctl.clients,
             ghost=self._ghost,
@@ -235,6 +240,6 @@ class Bridge:
 
     def close(self) -> None:
         """Stop observing the simulation (once its thread has stopped)."""
-        for observer in (self.stopwatch, self.commands):
+        for observer in self._attached:
             if observer in self.sim.observers:
                 self.sim.observers.remove(observer)

@@ -1,32 +1,26 @@
-"""The heads-up display: heartbeat, key lights, time, Task 2 stopwatch, pose, commands, help,
-and a red warning for each device switched off because its code raised.
+"""The heads-up display: heartbeat, key lights, time, the run's outcome (Task 2 stopwatch,
+collisions, path length, NaN replies), pose, commands, help, and a red warning for each device
+switched off because its code raised.
 
-:class:`Stopwatch` and :class:`CommandLog` observe the simulation in its own thread; the painters
-read only a :class:`~simmer.ui.snapshot.Snapshot` (and the static configuration).
+The outcome is the simulation's own :class:`~simmer.world.outcome.Outcome` (the figures a
+headless run prints); it and :class:`CommandLog` observe the simulation in its thread, and the
+painters read only a :class:`~simmer.ui.snapshot.Snapshot` (and the static configuration).
 """
 
 from __future__ import annotations
 
-import logging
 import math
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
-from simmer.geometry import FloatArray, Pose
 from simmer.ui.render import Color, Renderer
 from simmer.ui.scene import PANEL_HEIGHT, tint
 from simmer.ui.snapshot import HasScene, Snapshot
-from simmer.world import Simulation
-from simmer.world.events import CommandEvent, Event, ResetEvent, StepEvent
+from simmer.world.events import CommandEvent, Event
+from simmer.world.outcome import OutcomeReport
 from simmer.world.simulation import MANUAL_KEYS
 
-log = logging.getLogger("simmer.ui")
-
-REACH_DISTANCE = 1.0
-"""The robot "reaches" the block when its outline comes within this many inches of it."""
 KEY_LAYOUT = (("q", "w", "e"), ("a", "s", "d"))
 TEXT: Color = (235, 240, 240)
 DIM: Color = (150, 175, 175)
@@ -44,77 +38,12 @@ HELP = (
     ("Space", "pause / resume"),
     (".", "one step while paused"),
     ("+ / -", "faster / slower (simulation speed)"),
-    ("R", "reset robot, block, sensors and stopwatch"),
+    ("R", "reset robot, block, sensors and the outcome"),
     ("left-drag", "move the robot (refused onto a wall)"),
     ("right-drag", "turn the robot"),
     ("H", "show / hide this help"),
     ("Esc", "quit (or close the window)"),
 )
-
-
-def polygon_gap(a: FloatArray, b: FloatArray) -> float:
-    """Smallest distance between the outlines of two polygons (0 if their edges cross)."""
-    best = math.inf
-    for points, poly in ((a, b), (b, a)):
-        starts = poly
-        ends = np.roll(poly, -1, axis=0)
-        edge = ends - starts
-        length2 = np.maximum((edge**2).sum(axis=1), 1e-12)
-        for p in points:
-            t = np.clip(((p - starts) * edge).sum(axis=1) / length2, 0.0, 1.0)
-            nearest = starts + t[:, None] * edge
-            best = min(best, float(np.sqrt(((p - nearest) ** 2).sum(axis=1)).min()))
-    return best
-
-
-class Stopwatch:
-    """The lab's Task 2 timer, in simulated seconds, fed by the simulation's events.
-
-    It starts at the first step in which the robot moves and stops when the robot's outline
-    comes within :data:`REACH_DISTANCE` of the block; the result is logged. A reset of the
-    simulation resets it.
-    """
-
-    def __init__(self, sim: Simulation) -> None:
-        self.sim = sim
-        self.start: float | None = None
-        self.stop: float | None = None
-        self._last_pose: Pose = sim.robot.pose
-        robot_radius = float(np.sqrt((sim.robot.outline**2).sum(axis=1)).max())
-        self._near = robot_radius + sim.block.size * math.sqrt(0.5) + REACH_DISTANCE
-
-    def reset(self) -> None:
-        """Clear the timer; the next motion starts it again."""
-        self.start = self.stop = None
-        self._last_pose = self.sim.robot.pose
-
-    def __call__(self, event: Event) -> None:
-        """Observe one simulation event."""
-        if isinstance(event, ResetEvent):
-            self.reset()
-        elif isinstance(event, StepEvent) and self.stop is None:
-            if self.start is None:
-                if event.pose == self._last_pose:
-                    return
-                self.start = event.time - self.sim.dt
-            if self.reached():
-                self.stop = event.time
-                log.info("Task 2 stopwatch: reached the block in %.2f s", self.stop - self.start)
-
-    def reached(self) -> bool:
-        """True if the robot's outline is within :data:`REACH_DISTANCE` of the block."""
-        sim = self.sim
-        pose = sim.robot.pose
-        if math.hypot(pose.x - sim.block.x, pose.y - sim.block.y) > self._near:
-            return False
-        return polygon_gap(sim.robot.polygon(), sim.block.polygon) <= REACH_DISTANCE
-
-    def elapsed(self) -> float | None:
-        """Seconds on the clock (frozen once stopped), or None before the first motion."""
-        if self.start is None:
-            return None
-        end = self.stop if self.stop is not None else self.sim.time
-        return end - self.start
 
 
 @dataclass(frozen=True)
@@ -144,7 +73,14 @@ class CommandLog:
             self.entries.append(event)
             return
         count = last.count if isinstance(last, RepeatedCommand) else 1
-        self.entries[-1] = RepeatedCommand(event.time, event.message, event.replies, count + 1)
+        self.entries[-1] = RepeatedCommand(
+            time=event.time,
+            message=event.message,
+            replies=event.replies,
+            step=event.step,
+            client=event.client,
+            count=count + 1,
+        )
 
 
 def _same(a: Sequence[float], b: Sequence[float]) -> bool:
@@ -170,7 +106,12 @@ def speed_text(speed: float | None) -> str:
 LABEL_X = 160
 VALUE_X = 320
 ROWS = (10, 36, 62, 88)
+PATH_LABEL_X = 490
+"""The path length sits beside the collisions, in the last row."""
+PATH_X = 530
 COMMANDS_X = 700
+REPLIES_X = COMMANDS_X + 200
+"""Reply counts, beside the commands' heading."""
 CLIENTS_X = 1160
 LEGEND_WIDTH = 190
 
@@ -203,6 +144,11 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
     """The HUD's fixed parts: unlit key caps, labels, colour legend (painted once)."""
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
+    r.draw_text("h: help", (12, 78), DIM, 20)
+    for label, y in zip(("time", "Task 2 stopwatch", "true pose", "collisions"), ROWS, strict=True):
+        r.draw_text(label, (LABEL_X, y), DIM, 22)
+    r.draw_text("path", (PATH_LABEL_X, ROWS[3]), DIM, 22)
+    r.draw_text("last commands -> replies", (COMMANDS_X, ROWS[0]), DIM, 20)
     x = width - LEGEND_WIDTH
     if x < CLIENTS_X + 220:  # no room beside the clients column: leave it out
         return
@@ -210,10 +156,6 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
         y = 12 + 22 * i
         r.draw_rect((x, y + 2, 14, 14), color)
         r.draw_text(label, (x + 22, y), TEXT, 20)
-    r.draw_text("h: help", (12, 78), DIM, 20)
-    for label, y in zip(("time", "Task 2 stopwatch", "true pose", "collisions"), ROWS, strict=True):
-        r.draw_text(label, (LABEL_X, y), DIM, 22)
-    r.draw_text("last commands -> replies", (COMMANDS_X, ROWS[0]), DIM, 20)
 
 
 def paint_hud(r: Renderer, snap: Snapshot) -> None:
@@ -231,14 +173,6 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
         LIT if paused else TEXT,
         22,
     )
-    elapsed = snap.watch_elapsed
-    if elapsed is None:
-        watch, color = "starts when the robot first moves", DIM
-    elif not snap.watch_stopped:
-        watch, color = f"{elapsed:.2f} s", TEXT
-    else:
-        watch, color = f"reached the block in {elapsed:.2f} s", LIT
-    r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
     pose = snap.pose
     r.draw_text(
         f"x {pose.x:.2f} in   y {pose.y:.2f} in   heading {pose.heading:.1f} deg",
@@ -246,7 +180,8 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
         TEXT,
         22,
     )
-    r.draw_text(str(snap.collisions), (VALUE_X, ROWS[3]), TEXT, 22)
+    if snap.outcome is not None:
+        paint_outcome(r, snap.outcome)
 
     commands = snap.commands
     if not commands:
@@ -267,6 +202,31 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
     if snap.switched_off:
         paint_switched_off(r, snap.switched_off)
+
+
+def stopwatch_text(outcome: OutcomeReport) -> tuple[str, Color]:
+    """The Task 2 stopwatch line and its colour: waiting, running, or stopped at the block."""
+    if outcome.first_motion is None:
+        return "starts when the robot first moves", DIM
+    if outcome.task2_time is None:
+        return f"{outcome.time - outcome.first_motion:.2f} s", TEXT
+    return f"reached the block in {outcome.task2_time:.2f} s", LIT
+
+
+def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
+    """The run's outcome: Task 2 stopwatch, collisions (and when the first was), path length,
+    and how many replies were NaN."""
+    watch, color = stopwatch_text(outcome)
+    r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
+    collisions = str(outcome.collisions)
+    if outcome.first_collision is not None:
+        collisions += f" (first at {outcome.first_collision:.2f} s)"
+    r.draw_text(collisions, (VALUE_X, ROWS[3]), TEXT, 22)
+    r.draw_text(f"{outcome.path_length:.1f} in", (PATH_X, ROWS[3]), TEXT, 22)
+    replies = "reply" if outcome.commands == 1 else "replies"
+    r.draw_text(
+        f"{outcome.commands} {replies}, {outcome.nan_replies} NaN", (REPLIES_X, ROWS[0]), TEXT, 20
+    )
 
 
 def paint_switched_off(r: Renderer, switched_off: tuple[tuple[str, str], ...]) -> None:

@@ -23,6 +23,7 @@ from simmer.geometry import FloatArray, Pose, place_polygon
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
 from simmer.world.maze import Maze
+from simmer.world.outcome import OutcomeReport
 from simmer.world.robot import Robot
 
 Color = tuple[int, int, int]
@@ -112,7 +113,6 @@ class Snapshot:
 
     time: float
     pose: Pose
-    collisions: int
     block: FloatArray
     """The block's outline (K, 2)."""
     layout: RobotLayout
@@ -124,10 +124,9 @@ class Snapshot:
     speed: float | None = 1.0
     held: frozenset[str] = frozenset()
     """Manual-driving keys the simulation is obeying."""
-    watch_elapsed: float | None = None
-    """Task 2 stopwatch: seconds on the clock, None before the first motion."""
-    watch_stopped: bool = False
-    """True once the robot reached the block (the stopwatch is frozen)."""
+    outcome: OutcomeReport | None = None
+    """The run's outcome so far (Task 2 stopwatch, collisions, path, replies); None when no
+    :class:`~simmer.world.outcome.Outcome` follows the simulation."""
     commands: tuple[CommandEvent, ...] = ()
     """The last few messages and their replies, oldest first."""
     clients: tuple[str, ...] | None = None
@@ -150,8 +149,7 @@ class Snapshot:
         *,
         paused: bool = False,
         speed: float | None = 1.0,
-        watch_elapsed: float | None = None,
-        watch_stopped: bool = False,
+        outcome: OutcomeReport | None = None,
         commands: Sequence[CommandEvent] = (),
         clients: Sequence[str] | None = None,
         ghost: FloatArray | None = None,
@@ -165,7 +163,6 @@ class Snapshot:
         return cls(
             time=sim.time,
             pose=pose,
-            collisions=sim.collisions,
             block=frozen_array(np.array(sim.block.polygon, dtype=np.float64)),
             layout=layout,
             robot=layout.place(pose),
@@ -173,8 +170,7 @@ class Snapshot:
             paused=paused,
             speed=speed,
             held=sim.manual_keys,
-            watch_elapsed=watch_elapsed,
-            watch_stopped=watch_stopped,
+            outcome=outcome,
             commands=tuple(commands),
             clients=tuple(clients) if clients is not None else None,
             ghost=ghost,

@@ -216,7 +216,7 @@ class Window:
             self._drag_to(event.pos)
         elif kind == pygame.MOUSEBUTTONUP and self.drag is not None:
             self._drag_to(event.pos)
-            self.bridge.post(EndDrag(self.drag.pose))
+            self.bridge.post(EndDrag())
             self.drag = None
         return True
 
@@ -244,7 +244,7 @@ class Window:
         return True
 
     def reset(self) -> None:
-        """Ask for robot, block, devices, time and stopwatch back at the start; keys released."""
+        """Ask for robot, block, devices, time and outcome back at the start; keys released."""
         self.held.clear()
         self.drag = None
         self.bridge.post(Reset())

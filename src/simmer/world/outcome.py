@@ -16,7 +16,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simmer.geometry import Pose, polygon_gap
-from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
+from simmer.world.events import (
+    CollisionEvent,
+    CommandEvent,
+    Event,
+    PlaceEvent,
+    ReachedEvent,
+    ResetEvent,
+    StepEvent,
+)
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
@@ -65,7 +73,9 @@ class OutcomeReport:
             )
         else:
             task2 = "did not reach the block"
-        first = f" (first at {self.first_collision:.2f} s)" if self.first_collision else ""
+        first = (
+            f" (first at {self.first_collision:.2f} s)" if self.first_collision is not None else ""
+        )
         x, y, heading = self.final_pose
         return "\n".join(
             [
@@ -80,7 +90,11 @@ class OutcomeReport:
 
 
 class Outcome:
-    """Follows a simulation's events and keeps the run's outcome; reset with the simulation."""
+    """Follows a simulation's events and keeps the run's outcome; reset with the simulation.
+
+    When the robot reaches the block it adds a :class:`~simmer.world.events.ReachedEvent` to
+    the stream, for recordings and other observers.
+    """
 
     def __init__(self, sim: Simulation) -> None:
         self.sim = sim
@@ -119,11 +133,9 @@ class Outcome:
                     self.first_motion = event.time - self.sim.dt
             if self.first_motion is not None and self.reached_at is None and self.reached():
                 self.reached_at = event.time
-                log.info(
-                    "reached the block at %.2f s (Task 2 time %.2f s)",
-                    event.time,
-                    event.time - self.first_motion,
-                )
+                task2 = event.time - self.first_motion
+                log.info("reached the block at %.2f s (Task 2 time %.2f s)", event.time, task2)
+                self.sim.emit(ReachedEvent(event.time, task2, event.step))
         elif isinstance(event, CommandEvent):
             self.messages += 1
             self.commands += len(event.replies)
@@ -132,8 +144,19 @@ class Outcome:
             self.collisions += 1
             if self.first_collision is None:
                 self.first_collision = event.time
+        elif isinstance(event, PlaceEvent):
+            self._placed(event.pose)
         elif isinstance(event, ResetEvent):
             self._clear()
+
+    def _placed(self, pose: Pose) -> None:
+        """The robot was put somewhere by hand (dragged in the window): that is no motion (no
+        path length), and if it moved the robot, the Task 2 stopwatch starts again at the next
+        motion; collisions, commands and replies stand."""
+        if pose != self._last_pose:
+            self._last_pose = pose
+            self.first_motion = None
+            self.reached_at = None
 
     def reached(self) -> bool:
         """True if the robot's outline is within :data:`REACH_DISTANCE` of the block now."""
