@@ -288,49 +288,15 @@ class Runner:
         stop_event: threading.Event | None = None,
         until: float | None = None,
     ) -> None:
-        """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``."""
-        if self.lockstep:
-            self._run_lockstep(on_frame, stop_event, until)
-            return
-        sim = self.sim
-        next_step = next_frame = time.monotonic()
-        while not (stop_event is not None and stop_event.is_set()):
-            if until is not None and sim.time >= until - 1e-9:
-                break
-            now = time.monotonic()
-            if on_frame is not None and now >= next_frame:
-                if not on_frame(self):
-                    break
-                next_frame = max(next_frame + FRAME_INTERVAL, now)
-                now = time.monotonic()
-            wake = next_frame if on_frame is not None else math.inf
-            if self._reschedule:
-                self._reschedule = False
-                next_step = now
-            speed = self._speed
-            if self.paused:
-                self.serve(min(wake - now, MAX_WAIT))
-                next_step = time.monotonic()
-            elif speed is None or now >= next_step:
-                self.serve()
-                sim.step()
-                self._settle()
-                if speed is not None:
-                    next_step += sim.dt / speed
-                    if now - next_step > MAX_LAG:
-                        next_step = now
-            else:
-                self.serve(min(next_step - now, wake - now, MAX_WAIT))
+        """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``.
 
-    def _run_lockstep(
-        self,
-        on_frame: FrameCallback | None,
-        stop_event: threading.Event | None,
-        until: float | None,
-    ) -> None:
-        """Step only while the clock or a clock message asks for it; otherwise take the next
-        request, one at a time, so a program's messages meet the simulation in its order."""
+        In lockstep the simulation steps only while the clock or a clock message asks for it,
+        and otherwise takes the next request, one at a time, so a program's messages meet the
+        simulation in the program's order; in real time it steps on the wall clock and answers
+        every request between two steps.
+        """
         sim = self.sim
+        lockstep = self.lockstep
         next_step = next_frame = time.monotonic()
         while not (stop_event is not None and stop_event.is_set()):
             if until is not None and sim.time >= until - EPSILON:
@@ -346,15 +312,19 @@ class Runner:
                 self._reschedule = False
                 next_step = now
             speed = self._speed
-            if self.paused or not self._due():
-                self.serve(min(wake - now, MAX_WAIT), limit=1)
-                next_step = max(next_step, time.monotonic()) if speed is not None else next_step
+            if self.paused or (lockstep and not self._due()):
+                self.serve(min(wake - now, MAX_WAIT), limit=1 if lockstep else None)
+                next_step = time.monotonic()
             elif speed is None or now >= next_step:
+                if not lockstep:
+                    self.serve()
                 sim.step()
                 self._settle()
                 if speed is not None:
                     next_step += sim.dt / speed
                     if now - next_step > MAX_LAG:
                         next_step = now
-            else:
+            elif lockstep:  # requests wait until the simulation has caught up with the clock
                 self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))
+            else:
+                self.serve(min(next_step - now, wake - now, MAX_WAIT))
