@@ -11,6 +11,7 @@ import copy
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 import tomllib
 import tracemalloc
@@ -23,6 +24,7 @@ import numpy as np
 
 from simmer import Simulation
 from simmer.config import config_from_dict
+from simmer.record import RunRecorder
 from simmer.world.outcome import Outcome
 
 REPEATS = 5
@@ -32,6 +34,7 @@ TARGETS = {
     "no_sensor_steps": 50_000.0,
     "big_maze_ratio": 2.0,
     "observed_ratio": 0.90,
+    "recorded_idle_ratio": 0.85,
     "memory_mb": 80.0,
 }
 
@@ -90,10 +93,16 @@ def drive_forever(sim: Simulation) -> Callable[[], None]:
     return keep_moving
 
 
-def steps_per_second(data: dict[str, Any], sample: str | None, observed: bool = False) -> float:
+def steps_per_second(
+    data: dict[str, Any], sample: str | None, observed: bool = False, recorded: bool = False
+) -> float:
+    """Steps per second driving around, sending ``sample`` every step; ``observed``: with the
+    outcome every served run has; ``recorded``: and a run folder being written
+    (``simmer run --record``)."""
     sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
-    if observed:  # what every served run has: the outcome, following every event
-        Outcome.attach(sim)
+    outcome = Outcome.attach(sim) if observed or recorded else None
+    folder = tempfile.TemporaryDirectory()
+    recorder = RunRecorder(sim, Path(folder.name) / "run", outcome=outcome) if recorded else None
     keep_moving = drive_forever(sim)
 
     def run(count: int) -> None:
@@ -104,7 +113,27 @@ def steps_per_second(data: dict[str, Any], sample: str | None, observed: bool = 
                 sim.command(sample)
 
     run(200)
-    return best_rate(run, 6000)
+    rate = best_rate(run, 6000)
+    if recorder is not None:
+        recorder.close()
+    folder.cleanup()
+    return rate
+
+
+def recording_mb_per_minute() -> tuple[float, float]:
+    """MB of trace.csv and events.jsonl per simulated minute of a typical program: driving
+    around, reading the four ultrasonic sensors 20 times a second (every third step)."""
+    sim = Simulation(config_from_dict(lab_data(), "<bench>", Path.cwd()))
+    keep_moving = drive_forever(sim)
+    with tempfile.TemporaryDirectory() as folder:
+        with RunRecorder(sim, Path(folder) / "run") as recorder:
+            for step in range(3600):
+                keep_moving()
+                sim.step()
+                if step % 3 == 0:
+                    sim.command("u0,u1,u2,u3")
+        sizes = recorder.trace.path.stat().st_size, recorder.events.path.stat().st_size
+    return sizes[0] / 1e6, sizes[1] / 1e6
 
 
 def read_microseconds(data: dict[str, Any], device_id: str, pose: tuple[float, float]) -> float:
@@ -181,6 +210,8 @@ def main() -> dict[str, float]:
         "no_sensor_steps": steps_per_second(lab, None),
         "observed_all_sensors_steps": steps_per_second(lab, every, observed=True),
         "observed_no_sensor_steps": steps_per_second(lab, None, observed=True),
+        "recorded_all_sensors_steps": steps_per_second(lab, every, recorded=True),
+        "recorded_no_sensor_steps": steps_per_second(lab, None, recorded=True),
         "ultrasonic_us": read_microseconds(lab, "u0", (6.0, 42.0)),
         "infrared_us": read_microseconds(lab, "i0", (6.0, 42.0)),
         "ultrasonic_command_us": command_microseconds(lab, "u0"),
@@ -193,6 +224,13 @@ def main() -> dict[str, float]:
     figures["observed_idle_ratio"] = (
         figures["observed_no_sensor_steps"] / figures["no_sensor_steps"]
     )
+    figures["recorded_ratio"] = (
+        figures["recorded_all_sensors_steps"] / figures["observed_all_sensors_steps"]
+    )
+    figures["recorded_idle_ratio"] = (
+        figures["recorded_no_sensor_steps"] / figures["observed_no_sensor_steps"]
+    )
+    figures["trace_mb_min"], figures["events_mb_min"] = recording_mb_per_minute()
     figures["memory_mb"], figures["traced_mb"] = memory()
     figures["rss_numpy_mb"], figures["rss_numba_mb"], figures["rss_simmer_mb"] = memory_breakdown()
     rows = [
@@ -203,6 +241,13 @@ def main() -> dict[str, float]:
         ("  ratio to no observer", "observed_ratio", ">=", "0.90"),
         ("steps/s, none sampled, with the outcome observer", "observed_no_sensor_steps", "", ""),
         ("  ratio to no observer", "observed_idle_ratio", "", ""),
+        ("steps/s, all sampled, outcome + recording (--record)", "recorded_all_sensors_steps",
+         "", ""),
+        ("  ratio to the outcome alone (7 replies a step: worst case)", "recorded_ratio", "", ""),
+        ("steps/s, none sampled, outcome + recording", "recorded_no_sensor_steps", "", ""),
+        ("  ratio to the outcome alone", "recorded_idle_ratio", ">=", "0.85"),
+        ("MB of trace.csv per simulated minute (u0-u3 at 20 Hz)", "trace_mb_min", "", ""),
+        ("MB of events.jsonl per simulated minute (same run)", "events_mb_min", "", ""),
         ("µs per ultrasonic read", "ultrasonic_us", "<=", "15 (original: 280)"),
         ("µs per infrared read", "infrared_us", "", "(original: 43)"),
         ("µs per 'u0' command (parse + read)", "ultrasonic_command_us", "", ""),

@@ -237,6 +237,14 @@ def run(
             show_default=False,
         ),
     ] = None,
+    record: Annotated[
+        Path | None,
+        typer.Option(
+            help="Record the run into this folder (a new one): manifest.json, events.jsonl, "
+            "trace.csv, report.json and report.md.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -287,6 +295,14 @@ def run(
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
+    if record is not None:
+        from simmer.record.runfolder import prepare_folder
+
+        try:  # before any port opens: a folder that cannot be used is the whole message
+            prepare_folder(record)
+        except OSError as exc:
+            err.print(f"cannot record into {record}: {exc}", style="bold red", markup=False)
+            raise typer.Exit(1) from None
     log_file = _log_to_file() if program is not None else None
     if log_file is not None:
         out.print(f"the simulator's log goes to {log_file}", markup=False)
@@ -306,6 +322,7 @@ def run(
             lockstep=lockstep,
             link_delay=link_delay,
             timeout=timeout,
+            record=record,
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -314,6 +331,8 @@ def run(
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(served.outcome.report().summary(), markup=False)
+    if record is not None:
+        out.print(f"recorded in {record}; the report is {record / 'report.md'}", markup=False)
     if program is not None:
         if served.ended_by == "program":
             ended = f"the program exited with status {served.program_status}"
@@ -383,6 +402,24 @@ def convert(
         out.print(text, markup=False, end="")
     else:
         out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+
+
+@app.command()
+def plot(
+    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+) -> None:
+    """Draw a recorded run into its folder: path.png (the path over the maze, commands
+    numbered, collisions marked) and sensors.png (readings against time); report.md links
+    them."""
+    from simmer.record.plots import PlotError, plot_run
+
+    try:
+        written = plot_run(folder)
+    except PlotError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    for path in written:
+        out.print(f"wrote {path}", markup=False)
 
 
 @app.command()

@@ -14,6 +14,7 @@ from pathlib import Path
 from types import FrameType
 
 from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
+from simmer.record import RunRecorder, RunSetup
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Link
 from simmer.world import Simulation
@@ -112,13 +113,17 @@ def serve(
     lockstep: bool = False,
     link_delay: float | None = None,
     timeout: float | None = None,
+    record: Path | None = None,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
     program's command line, started here on this run's ports) exits, or ``timeout`` wall
-    seconds pass; with a window or headless, in real time or in ``lockstep``.
+    seconds pass; with a window or headless, in real time or in ``lockstep``. With ``record``
+    (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
+    ends, however it ends.
 
-    Raises ``OSError`` if a port cannot be opened or the program cannot be started, and
+    Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
+    ``record`` folder cannot be written (FileExistsError if it holds a run already), and
     :class:`~simmer.errors.SimmerError` if no window can be opened or something is already at
     ``serial_link``.
     """
@@ -128,6 +133,7 @@ def serve(
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
     restore_signals = _stop_on_signals()
+    recorder: RunRecorder | None = None
     try:
         link = Link(
             runner.bus,
@@ -140,6 +146,12 @@ def serve(
             serial_link=serial_link,
         )
         with link:
+            if record is not None:
+                clock = "lockstep" if lockstep else "realtime"
+                delay = runner.link_delay if lockstep else None
+                setup = RunSetup(clock, speed, delay, program, window)
+                recorder = RunRecorder(sim, record, setup, outcome)
+                echo(f"recording the run into {record}")
             for line in link.describe():
                 echo(line)
             if lockstep:
@@ -164,6 +176,10 @@ def serve(
     except KeyboardInterrupt:
         echo("stopped")
         ended.append("quit")
+    except BaseException:
+        if recorder is not None:  # keep what was recorded, with a report
+            recorder.close("error")
+        raise
     finally:
         runner.bus.close()
         if started is not None:
@@ -172,7 +188,10 @@ def serve(
     status = started.process.returncode if started is not None and ended[0] == "program" else None
     if status is not None:  # here, in the thread that owns the simulation
         sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.frame))
-    return Served(runner, outcome, ended[0], status, program_started=started is not None)
+    served = Served(runner, outcome, ended[0], status, program_started=started is not None)
+    if recorder is not None:
+        recorder.close(served.ended_by, status)
+    return served
 
 
 def _start_program(

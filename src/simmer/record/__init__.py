@@ -1,0 +1,31 @@
+"""Keeping runs: a run folder with the manifest, events, trace and report of one run.
+
+See :mod:`simmer.record.runfolder` for the folder, :mod:`simmer.record.eventlog` for
+``events.jsonl`` and :mod:`simmer.record.trace` for ``trace.csv``.
+"""
+
+from simmer.record.eventlog import EventLog, read_events
+from simmer.record.runfolder import (
+    LoadedRun,
+    RunRecorder,
+    RunSetup,
+    load_run,
+    read_manifest,
+    retrace,
+    write_report_md,
+)
+from simmer.record.trace import TRACE_RATE, TraceWriter
+
+__all__ = [
+    "TRACE_RATE",
+    "EventLog",
+    "LoadedRun",
+    "RunRecorder",
+    "RunSetup",
+    "TraceWriter",
+    "load_run",
+    "read_events",
+    "read_manifest",
+    "retrace",
+    "write_report_md",
+]

@@ -1,0 +1,216 @@
+"""``events.jsonl``: a run's event stream as JSON lines, written as it happens and read back.
+
+One JSON object per line, ``{"type":"command","time":1.5,"message":"u0","replies":[12.3],...}``:
+the event's fields under their own names, and ``type`` naming its class (:data:`TYPE_NAMES`).
+A pose is ``[x, y, heading]``, held keys a sorted list. JSON has no NaN or infinity, and
+replies carry both (+inf: a drive accepted; NaN: a bad command, a busy drive), so a float
+that is not finite is the string ``"nan"``, ``"inf"`` or ``"-inf"``; every other float is
+written in the shortest form that reads back to the same bits. :func:`read_events` gives
+back the very events (what replay needs); any JSON reader reads the file.
+
+:class:`EventLog` writes each line with one unbuffered ``write``, so after Ctrl-C, a crash or
+``kill -9`` the file holds every event up to the last, each line whole. It leaves out
+:class:`~simmer.world.events.StepEvent`: one per step (60 a second), each only a pose, which
+the trace keeps at a fixed rate (:mod:`simmer.record.trace`) and a replay recomputes. The
+run's last step is written at :meth:`EventLog.close` (unless an event came after it), so a
+replay knows where the run stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import fields
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, get_type_hints
+
+from simmer.geometry import Pose
+from simmer.world.events import (
+    CollisionEndEvent,
+    CollisionEvent,
+    CommandEvent,
+    Event,
+    KeysEvent,
+    PlaceEvent,
+    ReachedEvent,
+    ResetEvent,
+    RunEvent,
+    StepEvent,
+)
+
+TYPE_NAMES: dict[type[Event], str] = {
+    CommandEvent: "command",
+    StepEvent: "step",
+    CollisionEvent: "collision",
+    CollisionEndEvent: "collision-end",
+    ResetEvent: "reset",
+    KeysEvent: "keys",
+    PlaceEvent: "place",
+    ReachedEvent: "reached",
+    RunEvent: "run",
+}
+"""The ``type`` written for each event class."""
+EVENT_TYPES = {name: cls for cls, name in TYPE_NAMES.items()}
+NOT_FINITE = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf}
+"""How a float that JSON cannot hold is written, and what it reads back as."""
+
+# ----------------------------------------------------------------------------- writing
+
+
+def _number(value: float) -> str:
+    """A float as JSON text: exact, or ``"nan"``, ``"inf"``, ``"-inf"`` (see the module doc)."""
+    text = repr(value)
+    return f'"{text}"' if "n" in text else text  # only nan, inf and -inf have an n
+
+
+def _numbers(values: tuple[float, ...]) -> str:
+    """A pose or replies as a JSON list of numbers (all at once unless one is not finite:
+    a Python call per number would cost twice as much)."""
+    text = ",".join(map(repr, values))
+    if "n" in text:
+        text = ",".join(map(_number, values))
+    return "[" + text + "]"
+
+
+_string = lru_cache(maxsize=1024)(json.dumps)
+"""A string as JSON text; a program sends the same few messages again and again."""
+
+
+def _names(values: frozenset[str]) -> str:
+    return "[" + ",".join(map(_string, sorted(values))) + "]"
+
+
+_WRITERS: dict[Any, Callable[[Any], str]] = {
+    float: _number,
+    int: str,
+    str: _string,
+    Pose: _numbers,
+    tuple[float, ...]: _numbers,
+    frozenset[str]: _names,
+}
+"""How each type of event field is written (:data:`_READERS` reads it back)."""
+
+
+def _layout(cls: type[Event]) -> tuple[str, tuple[tuple[str, str, Callable[[Any], str]], ...]]:
+    """How a line of this event class starts, then each field's name, key and writer."""
+    hints = get_type_hints(cls)
+    keys = tuple((f.name, f',"{f.name}":', _WRITERS[hints[f.name]]) for f in fields(cls))
+    return f'{{"type":"{TYPE_NAMES[cls]}"', keys
+
+
+_LAYOUTS = {cls: _layout(cls) for cls in TYPE_NAMES}
+
+
+def event_line(event: Event) -> str:
+    """An event as one line of JSON, with its newline: ``type`` first, then its fields.
+
+    Put together here rather than by :func:`json.dumps`, which would need a dictionary made
+    first and costs half as much again; a recorder writes one for every command.
+    """
+    start, layout = _LAYOUTS[type(event)]
+    parts = [start]
+    for name, key, write in layout:
+        parts.append(key)
+        parts.append(write(getattr(event, name)))
+    parts.append("}\n")
+    return "".join(parts)
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def _float(value: Any) -> float:
+    """A float as :func:`_number` wrote it."""
+    if isinstance(value, str):
+        return NOT_FINITE[value]
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    raise ValueError(f"not a number: {value!r}")
+
+
+_READER_OF: dict[Any, Callable[[Any], Any]] = {
+    float: _float,
+    int: int,
+    str: str,
+    Pose: lambda value: Pose(*(_float(v) for v in value)),
+    tuple[float, ...]: lambda value: tuple(_float(v) for v in value),
+    frozenset[str]: lambda value: frozenset(str(v) for v in value),
+}
+_READERS = {
+    cls: {name: _READER_OF[hint] for name, hint in get_type_hints(cls).items()}
+    for cls in TYPE_NAMES
+}
+
+
+def event_from_dict(data: dict[str, Any]) -> Event:
+    """The event of one parsed line (ValueError if ``data`` is not one)."""
+    cls = EVENT_TYPES.get(data.get("type", ""))
+    if cls is None:
+        raise ValueError(f"unknown event type {data.get('type')!r}")
+    readers = _READERS[cls]
+    try:
+        values = {name: readers[name](value) for name, value in data.items() if name != "type"}
+        return cls(**values)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"not a {data['type']} event: {exc}") from None
+
+
+def read_events(path: str | Path) -> list[Event]:
+    """Every event in an ``events.jsonl`` file, in order.
+
+    A last line cut off before its newline (the disk filled, the machine lost power) is left
+    out; any other line that is not an event is a ValueError naming its line number.
+    """
+    events: list[Event] = []
+    with Path(path).open(encoding="utf-8") as file:
+        for number, line in enumerate(file, 1):
+            try:
+                events.append(event_from_dict(json.loads(line)))
+            except ValueError as exc:  # json.JSONDecodeError is one
+                if not line.endswith("\n"):
+                    break
+                raise ValueError(f"{path} line {number}: {exc}") from None
+    return events
+
+
+# ----------------------------------------------------------------------------- the observer
+
+
+class EventLog:
+    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._file = self.path.open("wb", buffering=0)
+        self._last_step: StepEvent | None = None
+        self.written = 0
+        """Events written so far."""
+
+    def __call__(self, event: Event) -> None:
+        """Observe one event: write it, or keep a step for :meth:`close`."""
+        if type(event) is StepEvent:
+            self._last_step = event
+            return
+        if self._file.closed:  # a simulation thread that outlived the run
+            return
+        self._last_step = None
+        self._write(event)
+
+    def _write(self, event: Event) -> None:
+        """One line, in one system call (more only if the system writes part of it)."""
+        line = event_line(event).encode("utf-8")
+        done = self._file.write(line) or 0
+        while done < len(line):
+            done += self._file.write(line[done:]) or 0
+        self.written += 1
+
+    def close(self) -> None:
+        """Write the run's last step if nothing came after it, and close the file (again:
+        nothing)."""
+        if self._file.closed:
+            return
+        if self._last_step is not None:
+            self._write(self._last_step)
+        self._file.close()

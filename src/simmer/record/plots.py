@@ -1,0 +1,696 @@
+"""Plots of a recorded run: the path over the maze (``path.png``) and the sensor readings
+against time (``sensors.png``), in world inches with +y down the page as in the window.
+
+What is read from a run folder (the names are the constants below):
+
+- ``trace.csv``: a header row, then one row per trace sample. Columns ``time`` (simulated
+  seconds), ``x``, ``y`` (inches) and ``heading`` (degrees) are required; ``step`` and
+  ``collisions`` are known and not plotted; every other column whose cells are numbers (or blank
+  before a sensor's first reading) is a sensor, plotted under its header (its id, e.g. ``u0``).
+  Rows that do not parse (the half-written last line of a killed run) are skipped. A reset puts
+  the simulated clock back to 0: where ``time`` goes backwards a new part of the run begins.
+- ``events.jsonl`` (optional): one JSON object per line with ``type``, ``time`` and more.
+  ``command`` events (``message``, ``replies``: numbers, or the strings "nan", "inf", "-inf")
+  are numbered from 1 along the path; ``collision`` events are marked at their ``pose``
+  ``[x, y, heading]`` (else where the trace was at that time); ``reached`` is marked; ``reset``
+  starts the next part of the run. Other types, unknown keys and lines that do not parse are
+  ignored.
+- ``manifest.json``: ``config.settings`` (the configuration's settings, as
+  :class:`~simmer.config.models.Settings` dumps them; unknown keys are ignored) draws the maze,
+  floor, start and block exactly as the simulator does. Optional: ``seed`` and
+  ``config.source`` are shown in the title; ``config.devices`` (a list of ``{"id", "kind"}``)
+  puts sensors of one kind in one panel with its unit (without it: ids starting with the same
+  letters, ``u0`` and ``u1``, share a panel).
+
+Matplotlib (Agg backend, no pyplot) is imported only when a plot is drawn.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from pydantic import ValidationError
+
+from simmer.config.models import Settings
+from simmer.errors import SimmerError
+from simmer.geometry import FloatArray, heading_vector, place_polygon
+from simmer.world.maze import Block, Maze, robot_outline
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+TRACE_FILE = "trace.csv"
+EVENTS_FILE = "events.jsonl"
+MANIFEST_FILE = "manifest.json"
+REPORT_FILE = "report.md"
+PATH_IMAGE = "path.png"
+SENSORS_IMAGE = "sensors.png"
+
+COL_TIME, COL_X, COL_Y, COL_HEADING = "time", "x", "y", "heading"
+TRACE_REQUIRED = (COL_TIME, COL_X, COL_Y, COL_HEADING)
+TRACE_NOT_SENSORS = frozenset({*TRACE_REQUIRED, "step", "collisions"})
+"""Trace columns that are not sensor readings."""
+
+EV_TYPE, EV_TIME, EV_MESSAGE, EV_REPLIES, EV_POSE = "type", "time", "message", "replies", "pose"
+EV_COMMAND, EV_COLLISION, EV_RESET, EV_REACHED = "command", "collision", "reset", "reached"
+MANIFEST_CONFIG, MANIFEST_SETTINGS, MANIFEST_SEED = "config", "settings", "seed"
+MANIFEST_SOURCE, MANIFEST_DEVICES, DEVICE_ID, DEVICE_KIND = "source", "devices", "id", "kind"
+SENSOR_UNITS = {
+    "ultrasonic": "distance (in)",
+    "infrared": "floor (1 white, 0 black)",
+    "compass": "heading (°)",
+    "gyroscope": "angle turned (°)",
+}
+"""What the built-in sensor kinds read, for the y axis of their panel."""
+IMAGES = ((PATH_IMAGE, "The robot's true path"), (SENSORS_IMAGE, "Sensor readings against time"))
+"""The images :func:`plot_run` draws, with the words report.md shows for each."""
+
+WHITE_TILE = (235, 235, 235)
+BLACK_TILE = (30, 30, 30)
+"""Floor tile colours, as the window paints them (:mod:`simmer.ui.scene`)."""
+PATH_COLOR = "#ff8c00"
+COMMAND_COLOR = "#1f3b73"
+NAN_COLOR = "#d7191c"
+COLLISION_COLOR = "#ff00c8"
+START_COLOR = "#1a9850"
+DPI = 110
+PAGE_INCHES = 12.0
+"""Inches of the page the maze's longest side takes on path.png."""
+LABEL_POINTS = 7
+LABEL_SPACING = 3.0
+"""Inches at least between command labels on the path: commands sent closer share one."""
+MAX_PATH_LABELS = 30
+"""About as many command labels at most along the path (more are spaced further apart)."""
+MAX_TIME_LABELS = 40
+"""Command labels at most across the sensor plot's width."""
+
+
+class PlotError(SimmerError):
+    """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
+
+
+@dataclass(frozen=True)
+class Command:
+    """One command event: its number (from 1), when, in which part of the run, and replies."""
+
+    number: int
+    time: float
+    part: int
+    message: str
+    replies: tuple[float, ...]
+
+    @property
+    def nan(self) -> bool:
+        """Whether any reply was NaN (the command failed)."""
+        return any(math.isnan(r) for r in self.replies)
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A collision or the block reached: when, in which part of the run, and where if known."""
+
+    time: float
+    part: int
+    pose: tuple[float, float] | None = None
+
+
+@dataclass
+class Trace:
+    """The trace columns as arrays; ``part`` counts resets (the clock went back)."""
+
+    time: FloatArray
+    x: FloatArray
+    y: FloatArray
+    heading: FloatArray
+    part: np.ndarray[Any, np.dtype[np.int64]]
+    sensors: dict[str, FloatArray]
+
+    @property
+    def parts(self) -> int:
+        """Parts of the run (one more than the resets seen in the trace)."""
+        return int(self.part[-1]) + 1
+
+    def positions(self, marks: Sequence[Command | Mark]) -> FloatArray:
+        """Where the robot was at each command or mark, (N, 2), interpolated between samples
+        of its part of the run."""
+        times = np.array([m.time for m in marks], dtype=np.float64)
+        parts = np.minimum([m.part for m in marks], self.parts - 1)
+        result = np.zeros((len(marks), 2))
+        for p in np.unique(parts).tolist():
+            rows, chosen = self.part == p, parts == p
+            result[chosen, 0] = np.interp(times[chosen], self.time[rows], self.x[rows])
+            result[chosen, 1] = np.interp(times[chosen], self.time[rows], self.y[rows])
+        return result
+
+    def offsets(self) -> FloatArray:
+        """Seconds to add to each part's times to put the parts one after the other."""
+        ends = [float(self.time[self.part == p][-1]) for p in range(self.parts)]
+        return np.concatenate(([0.0], np.cumsum(ends[:-1])))
+
+    def run_time(self) -> FloatArray:
+        """Each sample's time with the parts one after the other (for plotting against)."""
+        result: FloatArray = self.time + self.offsets()[self.part]
+        return result
+
+    def run_times(self, commands: Sequence[Command]) -> FloatArray:
+        """The times of commands with the parts of the run one after the other."""
+        offsets = self.offsets()
+        return np.array([c.time + offsets[min(c.part, self.parts - 1)] for c in commands])
+
+    def length(self) -> float:
+        """Inches driven (jumps between parts left out)."""
+        same = self.part[1:] == self.part[:-1]
+        return float(np.hypot(np.diff(self.x), np.diff(self.y))[same].sum())
+
+
+@dataclass
+class RecordedRun:
+    """What the plots need from a run folder."""
+
+    folder: Path
+    settings: Settings
+    seed: int | None
+    trace: Trace
+    source: str = ""
+    """The configuration file the run used (its name is shown), "" if unknown."""
+    kinds: dict[str, str] = field(default_factory=dict)
+    """Device kind of each device id the manifest lists."""
+    commands: list[Command] = field(default_factory=list)
+    collisions: list[Mark] = field(default_factory=list)
+    reached: list[Mark] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class PixelMap:
+    """World inches to pixels of a saved image: column from the left, row from the top."""
+
+    x0: float
+    x_scale: float
+    y0: float
+    y_scale: float
+
+    def pixel(self, x: float, y: float) -> tuple[float, float]:
+        """The pixel (column, row) of world point (x, y)."""
+        return self.x0 + self.x_scale * x, self.y0 + self.y_scale * y
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def read_run(folder: str | Path) -> RecordedRun:
+    """Read a run folder (see the module docstring); :class:`PlotError` if it cannot be."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise PlotError(f"{folder} is not a folder; give a run folder (simmer run --record DIR)")
+    if not (folder / TRACE_FILE).is_file():
+        raise PlotError(
+            f"no {TRACE_FILE} in {folder}: not a run folder (record one with simmer run --record)"
+        )
+    trace = _read_trace(folder / TRACE_FILE)
+    run = _read_manifest(folder / MANIFEST_FILE, folder, trace)
+    if (folder / EVENTS_FILE).is_file():
+        _read_events(folder / EVENTS_FILE, run)
+    return run
+
+
+def _read_trace(path: Path) -> Trace:
+    """The trace's columns; a new part wherever the clock goes back (a reset)."""
+    try:
+        with path.open(newline="", encoding="utf-8") as file:
+            reader = csv.reader(file)
+            header = [name.strip() for name in next(reader, [])]
+            rows = list(reader)
+    except (OSError, UnicodeError, csv.Error) as exc:
+        raise PlotError(f"cannot read {path}: {exc}") from None
+    missing = [name for name in TRACE_REQUIRED if name not in header]
+    if missing:
+        raise PlotError(f"{path} has no column {', '.join(missing)} (its header: {header})")
+    index = {name: i for i, name in enumerate(header)}
+    candidates = [name for name in header if name and name not in TRACE_NOT_SENSORS]
+    required, values = [index[name] for name in TRACE_REQUIRED], []
+    for row in rows:
+        if len(row) != len(header):
+            continue
+        try:
+            pose = [float(row[i]) for i in required]
+        except ValueError:
+            continue
+        if all(math.isfinite(v) for v in pose):
+            values.append((pose, row))
+    if not values:
+        raise PlotError(f"{path} has no rows of data: the run recorded nothing")
+    poses = np.array([pose for pose, _ in values], dtype=np.float64)
+    sensors = {}
+    for name in candidates:
+        column = [_number(row[index[name]]) for _, row in values]
+        if all(v is not None for v in column):
+            sensors[name] = np.array(column, dtype=np.float64)
+    time = poses[:, 0]
+    part = np.concatenate(([0], np.cumsum(np.diff(time) < 0))).astype(np.int64)
+    return Trace(time, poses[:, 1], poses[:, 2], poses[:, 3], part, sensors)
+
+
+def _number(cell: str) -> float | None:
+    """A cell as a number (blank: NaN, before a sensor's first reading); None if not one."""
+    if not cell.strip():
+        return math.nan
+    try:
+        return float(cell)
+    except ValueError:
+        return None
+
+
+def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
+    """The run a manifest describes, with this trace (no events yet)."""
+    if not path.is_file():
+        raise PlotError(f"no {MANIFEST_FILE} in {path.parent}: the maze to draw is unknown")
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeError, ValueError) as exc:
+        raise PlotError(f"cannot read {path}: {exc}") from None
+    config = manifest.get(MANIFEST_CONFIG) if isinstance(manifest, dict) else None
+    data = config.get(MANIFEST_SETTINGS) if isinstance(config, dict) else None
+    if not isinstance(config, dict) or not isinstance(data, dict):
+        raise PlotError(f"{path} has no {MANIFEST_CONFIG}.{MANIFEST_SETTINGS}: the maze is unknown")
+    known = {key: value for key, value in data.items() if key in Settings.model_fields}
+    try:
+        settings = Settings.model_validate(known)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(part) for part in first["loc"])
+        raise PlotError(f"{path}: setting {where}: {first['msg']}") from None
+    seed = manifest.get(MANIFEST_SEED)
+    source = config.get(MANIFEST_SOURCE)
+    devices = config.get(MANIFEST_DEVICES)
+    kinds = {
+        device[DEVICE_ID]: device[DEVICE_KIND]
+        for device in (devices if isinstance(devices, list) else [])
+        if isinstance(device, dict)
+        and isinstance(device.get(DEVICE_ID), str)
+        and isinstance(device.get(DEVICE_KIND), str)
+    }
+    return RecordedRun(
+        folder,
+        settings,
+        seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
+        trace,
+        source if isinstance(source, str) else "",
+        kinds,
+    )
+
+
+def _read_events(path: Path, run: RecordedRun) -> None:
+    """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``."""
+    part = 0
+    for event in _json_lines(path):
+        kind, time = event.get(EV_TYPE), _float(event.get(EV_TIME))
+        if kind == EV_RESET:
+            part += 1
+        elif not math.isfinite(time):
+            continue
+        elif kind == EV_COMMAND:
+            replies = event.get(EV_REPLIES)
+            values = tuple(_float(r) for r in replies) if isinstance(replies, list) else ()
+            message = str(event.get(EV_MESSAGE, ""))
+            run.commands.append(Command(len(run.commands) + 1, time, part, message, values))
+        elif kind == EV_COLLISION:
+            run.collisions.append(Mark(time, part, _position(event.get(EV_POSE))))
+        elif kind == EV_REACHED:
+            run.reached.append(Mark(time, part))
+
+
+def _json_lines(path: Path) -> Iterator[dict[str, Any]]:
+    """The JSON objects of a JSON-lines file, skipping lines that are not one."""
+    try:
+        with path.open(encoding="utf-8", errors="replace") as file:
+            for line in file:
+                try:
+                    value = json.loads(line)
+                except ValueError:
+                    continue
+                if isinstance(value, dict):
+                    yield value
+    except OSError as exc:
+        raise PlotError(f"cannot read {path}: {exc}") from None
+
+
+def _float(value: Any) -> float:
+    """A JSON number, or "nan"/"inf"/"-inf", as a float; NaN for anything else."""
+    if isinstance(value, bool):
+        return math.nan
+    if isinstance(value, int | float):
+        return float(value)
+    if isinstance(value, str) and value.strip().lower() in ("nan", "inf", "-inf", "+inf"):
+        return float(value)
+    return math.nan
+
+
+def _position(value: Any) -> tuple[float, float] | None:
+    """(x, y) of a ``[x, y, heading]`` pose, or None."""
+    if isinstance(value, list) and len(value) >= 2:
+        x, y = _float(value[0]), _float(value[1])
+        if math.isfinite(x) and math.isfinite(y):
+            return x, y
+    return None
+
+
+# ----------------------------------------------------------------------------- plotting
+
+
+def plot_run(folder: str | Path) -> list[Path]:
+    """Write ``path.png`` and ``sensors.png`` into a run folder and link them from its
+    ``report.md`` (if there is one and it does not yet); return the files written."""
+    run = read_run(folder)
+    path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
+    write_path_plot(run, path)
+    write_sensor_plot(run, sensors)
+    return [path, sensors, report] if link_from_report(report, IMAGES) else [path, sensors]
+
+
+def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
+    """Append a "## Plots" section showing the ``images`` (file name, words) that ``report``
+    (if it exists) does not show yet; return whether it was changed."""
+    if not report.is_file():
+        return False
+    text = report.read_text(encoding="utf-8")
+    missing = [(name, alt) for name, alt in images if f"]({name}" not in text]
+    if not missing:
+        return False
+    section = "\n".join(f"![{alt}]({name})\n" for name, alt in missing)
+    lead = "" if text.endswith("\n\n") else "\n" if text.endswith("\n") else "\n\n"
+    report.write_text(f"{text}{lead}## Plots\n\n{section}", encoding="utf-8")
+    return True
+
+
+def write_path_plot(run: RecordedRun, target: Path) -> PixelMap:
+    """Draw the path over the maze into ``target``; return where world points land in it."""
+    from matplotlib import style
+
+    with style.context("default"):
+        fig, ax = _path_figure(run)
+        _save(fig, target)
+        origin, unit = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
+        height = fig.bbox.height
+    return PixelMap(origin[0], unit[0] - origin[0], height - origin[1], origin[1] - unit[1])
+
+
+def write_sensor_plot(run: RecordedRun, target: Path) -> None:
+    """Draw each sensor's readings against time into ``target``, commands marked."""
+    from matplotlib import style
+
+    with style.context("default"):
+        _save(_sensor_figure(run), target)
+
+
+def _save(fig: Figure, target: Path) -> None:
+    """Write a figure as PNG with the Agg canvas (no pyplot, no window)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    fig.savefig(target, dpi=fig.dpi, format="png")
+
+
+def _rgb(color: Sequence[int]) -> tuple[float, float, float]:
+    """A 0-255 RGB colour as matplotlib's 0-1."""
+    r, g, b = color[:3]
+    return r / 255, g / 255, b / 255
+
+
+def _title(run: RecordedRun) -> str:
+    """The second title line: time, distance, commands, collisions, block, resets, seed,
+    configuration."""
+    trace = run.trace
+    duration = float(trace.run_time()[-1])
+    parts = [f"{duration:.1f} s", f"{trace.length():.0f} in driven"]
+    nans = sum(c.nan for c in run.commands)
+    parts.append(f"{len(run.commands)} commands" + (f" ({nans} answered NaN)" if nans else ""))
+    parts.append(f"{len(run.collisions)} collision{'s' if len(run.collisions) != 1 else ''}")
+    if run.reached:
+        parts.append(f"block reached at {run.reached[0].time:.2f} s")
+    if trace.parts > 1:
+        parts.append(f"{trace.parts - 1} reset{'s' if trace.parts > 2 else ''}")
+    if run.seed is not None:
+        parts.append(f"seed {run.seed}")
+    if run.source:
+        parts.append(f"config {Path(run.source).name}")
+    return " · ".join(parts)
+
+
+def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
+    """The path figure: floor, solid cells, walls, block, start, path, commands, collisions."""
+    from matplotlib.figure import Figure
+
+    settings, trace = run.settings, run.trace
+    maze = Maze.from_settings(settings)
+    margin = maze.cell * 0.15
+    scale = max(maze.width, maze.height) / PAGE_INCHES
+    width = maze.width / scale + 0.8
+    height = maze.height / scale + 2.2
+    fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
+    ax = fig.add_subplot()
+    ax.set_facecolor(_rgb(settings.background_color))
+    _draw_maze(ax, maze, settings)
+    start, block, wall = _draw_block_and_start(ax, settings)
+    for p in range(trace.parts):
+        rows = trace.part == p
+        ax.plot(trace.x[rows], trace.y[rows], color=PATH_COLOR, lw=2.4, zorder=4)
+    end = (float(trace.x[-1]), float(trace.y[-1]), float(trace.heading[-1]))
+    _draw_robot(ax, settings, end, PATH_COLOR, "--")
+    ax.plot(end[0], end[1], "s", ms=7, mfc=PATH_COLOR, mec="black", zorder=6)
+    handles = [_line(PATH_COLOR, "-", "path driven"), start]
+    handles.append(_line(PATH_COLOR, "s", "end (outline, heading)", mec="black"))
+    handles += _draw_commands(ax, run, scale)
+    if run.collisions:
+        points = trace.positions(run.collisions)
+        for i, mark in enumerate(run.collisions):
+            points[i] = mark.pose or points[i]  # where the event says, if it says
+        xs, ys = points.T
+        ax.plot(xs, ys, "X", ms=12, mfc=COLLISION_COLOR, mec="white", mew=1.2, ls="", zorder=8)
+        handles.append(_line(COLLISION_COLOR, "X", f"collision ({len(points)})", mec="white"))
+    if run.reached:
+        (x, y), mark = trace.positions(run.reached[:1])[0], run.reached[0]
+        ax.plot(x, y, "*", ms=18, mfc="gold", mec="black", zorder=7)
+        handles.append(_line("gold", "*", f"block reached ({mark.time:.2f} s)", mec="black"))
+    handles += [block, wall]
+    ax.set_xlim(-margin, maze.width + margin)
+    ax.set_ylim(maze.height + margin, -margin)  # +y down the page, as in the window
+    ax.set_aspect("equal")
+    ax.set_xticks(np.arange(maze.cols + 1) * maze.cell)
+    ax.set_yticks(np.arange(maze.rows + 1) * maze.cell)
+    ax.tick_params(top=True, labeltop=True, labelsize=9)
+    ax.set_xlabel("x (inches)")
+    ax.set_ylabel("y (inches, down)")
+    ax.set_title(f"Path of the run in {run.folder.resolve().name}\n{_title(run)}", fontsize=12)
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
+    return fig, ax
+
+
+def _draw_maze(ax: Axes, maze: Maze, settings: Settings) -> None:
+    """Floor tiles, solid cells and walls, as the simulator builds and draws them."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Rectangle
+
+    rows, cols = maze.floor_white.shape
+    floor = np.where(maze.floor_white[..., None], WHITE_TILE, BLACK_TILE).astype(np.uint8)
+    image = ax.imshow(
+        floor,
+        extent=(0, cols * maze.tile, rows * maze.tile, 0),
+        interpolation="nearest",
+        zorder=1,
+    )
+    image.set_clip_path(Rectangle((0, 0), maze.width, maze.height, transform=ax.transData))
+    solid_rgb = tuple(round(c * 0.65) for c in settings.background_color)  # the window's tint
+    solid = np.zeros((maze.rows, maze.cols, 4), dtype=np.uint8)
+    solid[maze.solid] = (*solid_rgb, 255)
+    ax.imshow(solid, extent=(0, maze.width, maze.height, 0), interpolation="nearest", zorder=2)
+    walls = list(maze.segments.reshape(-1, 2, 2))
+    ax.add_collection(LineCollection(walls, colors=[_rgb(settings.wall_color)], lw=2.5, zorder=3))
+
+
+def _draw_block_and_start(ax: Axes, settings: Settings) -> tuple[Any, Any, Any]:
+    """The block and the robot's outline and heading at the start; legend entries for the
+    start, the block and the walls."""
+    from matplotlib.patches import Polygon
+
+    block = Block.from_settings(settings)
+    color = _rgb(settings.block_color)
+    ax.add_patch(Polygon(block.polygon, closed=True, fc=color, ec="black", lw=1.0, zorder=5))
+    x, y = settings.robot_start_position
+    _draw_robot(ax, settings, (x, y, settings.robot_start_rotation), START_COLOR, "-")
+    ax.plot(x, y, "o", ms=8, mfc=START_COLOR, mec="white", zorder=6)
+    return (
+        _line(START_COLOR, "o", "start (outline, heading)", mec="white"),
+        _line(color, "s", "block", mec="black"),
+        _line(_rgb(settings.wall_color), "-", "wall"),
+    )
+
+
+def _draw_robot(
+    ax: Axes, settings: Settings, pose: tuple[float, float, float], color: str, style: str
+) -> None:
+    """The robot's outline at ``pose`` and an arrow along its heading, under the path."""
+    from matplotlib.patches import Polygon
+
+    x, y, heading = pose
+    outline = robot_outline(settings)
+    placed = np.empty_like(outline)
+    place_polygon(outline, x, y, heading, placed)
+    ax.add_patch(Polygon(placed, closed=True, fill=False, ec=color, lw=2.0, ls=style, zorder=3.5))
+    reach = 1.4 * float(np.abs(outline).max())
+    dx, dy = heading_vector(heading)
+    ax.annotate(
+        "",
+        xy=(x + dx * reach, y + dy * reach),
+        xytext=(x, y),
+        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 2.0},
+        zorder=3.5,
+    )
+
+
+def _draw_commands(ax: Axes, run: RecordedRun, scale: float) -> list[Any]:
+    """Command numbers along the path, at the pose where each was sent: commands sent close
+    together share one label ("4–9"), so labels neither overlap nor number more than about
+    :data:`MAX_PATH_LABELS`; a dot where each label points, a red one at each NaN reply.
+    ``scale``: world inches per inch of the page."""
+    if not run.commands:
+        return []
+    points = run.trace.positions(run.commands)
+    widest = 2 * len(str(len(run.commands))) + 1
+    width = (widest * 0.6 * LABEL_POINTS / 72 + 0.1) * scale
+    labels = _labels(points, max(LABEL_SPACING, width, run.trace.length() / MAX_PATH_LABELS))
+    anchors = [anchor for anchor, _ in labels]
+    nan = [i for i, c in enumerate(run.commands) if c.nan]
+    for chosen, color, size in ((anchors, COMMAND_COLOR, 16), (nan, NAN_COLOR, 24)):
+        xs, ys = points[chosen].T
+        ax.scatter(xs, ys, s=size, c=color, edgecolors="white", lw=0.6, zorder=6)
+    for anchor, text in labels:
+        ax.annotate(
+            text,
+            points[anchor],
+            xytext=(5, 5),
+            textcoords="offset points",
+            fontsize=LABEL_POINTS,
+            color=COMMAND_COLOR,
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.85},
+            zorder=8,
+        )
+    handles = [_line(COMMAND_COLOR, "o", "commands n–m sent from here", mec="white")]
+    if nan:
+        handles.append(_line(NAN_COLOR, "o", "command answered NaN", mec="white"))
+    return handles
+
+
+def _labels(points: FloatArray, spacing: float) -> list[tuple[int, str]]:
+    """Labels of command numbers, (index of the point labelled, text), at least ``spacing``
+    apart: a run of consecutive commands within ``spacing`` of its first one is one range
+    ("4–9"); ranges at a place labelled before (after a reset, or driving back) join its label,
+    one a line."""
+    groups: list[tuple[int, int]] = []
+    for i, (x, y) in enumerate(points.tolist()):
+        if groups and math.dist((x, y), points[groups[-1][0]]) < spacing:
+            groups[-1] = (groups[-1][0], i)
+        else:
+            groups.append((i, i))
+    labels: dict[int, list[str]] = {}
+    for first, last in groups:
+        text = str(first + 1) if first == last else f"{first + 1}–{last + 1}"
+        near = (a for a in labels if math.dist(points[a], points[first]) < spacing)
+        labels.setdefault(next(near, first), []).append(text)
+    return [
+        (anchor, "\n".join(texts if len(texts) <= 3 else [texts[0], "…", texts[-1]]))
+        for anchor, texts in labels.items()
+    ]
+
+
+def _line(color: Any, marker: str, label: str, mec: str | None = None) -> Any:
+    """A legend entry."""
+    from matplotlib.lines import Line2D
+
+    if marker == "-":
+        return Line2D([], [], color=color, lw=2.5, label=label)
+    return Line2D([], [], color=color, marker=marker, ls="", ms=9, mec=mec or color, label=label)
+
+
+def sensor_panels(run: RecordedRun) -> list[tuple[str, list[str]]]:
+    """The sensor plot's panels, (y-axis label, sensor ids), in trace order: one per sensor
+    kind the manifest names, else one per id prefix (the letters before the digits)."""
+    panels: dict[str, list[str]] = {}
+    for name in run.trace.sensors:
+        kind = run.kinds.get(name)
+        if kind is not None:
+            label = f"{kind}: {SENSOR_UNITS.get(kind, 'reading')}"
+        else:
+            prefix = re.match(r"\D*", name)
+            label = f"{prefix.group() if prefix else name}…: reading"
+        panels.setdefault(label, []).append(name)
+    return list(panels.items())
+
+
+def _sensor_figure(run: RecordedRun) -> Figure:
+    """Readings against time: a lane of numbered commands, then a panel per kind of sensor
+    (:func:`sensor_panels`) with a line per sensor."""
+    from matplotlib.figure import Figure
+
+    trace = run.trace
+    offsets, time = trace.offsets(), trace.run_time()
+    groups = sensor_panels(run) or [("", [])]
+    fig = Figure(figsize=(12.0, 2.0 + 2.6 * len(groups)), dpi=DPI, layout="constrained")
+    lane, *axes = fig.subplots(
+        len(groups) + 1, 1, sharex=True, height_ratios=[0.45] + [3.0] * len(groups)
+    )
+    _command_lane(lane, run, trace.run_times(run.commands), float(time[-1] - time[0]))
+    for ax, (unit, names) in zip(axes, groups, strict=True):
+        read = False
+        for name in names:
+            values = trace.sensors[name].copy()
+            values[~np.isfinite(values)] = np.nan  # no reading yet, or a failed one: a gap
+            seen = bool(np.isfinite(values).any())
+            label = name if seen else f"{name} (never read)"
+            ax.plot(time, values, lw=1.6, label=label, drawstyle="steps-post")
+            read = read or seen
+        if names:
+            ax.legend(loc="upper right", fontsize=9, ncols=min(len(names), 6))
+        if not read:
+            ax.set_yticks([])
+            say = "no command read these sensors" if names else "no sensors in the trace"
+            ax.text(0.5, 0.5, say, ha="center", va="center", transform=ax.transAxes)
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3)
+    for ax in (lane, *axes):
+        for p in range(1, trace.parts):
+            ax.axvline(offsets[p], color="grey", ls="--", lw=1.0)
+    after_reset = " (parts after a reset follow on)" if trace.parts > 1 else ""
+    axes[-1].set_xlabel(f"time (s){after_reset}")
+    pad = max(float(time[-1] - time[0]), 1.0) * 0.01  # a command at 0 s clear of the frame
+    axes[-1].set_xlim(time[0] - pad, time[-1] + pad)
+    fig.suptitle(f"Sensor readings in {run.folder.resolve().name}\n{_title(run)}", fontsize=12)
+    return fig
+
+
+def _command_lane(ax: Axes, run: RecordedRun, times: FloatArray, span: float) -> None:
+    """A tick at every command's time (red: answered NaN), numbered as on the path, at most
+    :data:`MAX_TIME_LABELS` numbers across the ``span`` seconds shown."""
+    ax.set_yticks([])
+    ax.set_ylim(0.0, 1.0)
+    ax.set_ylabel("commands", rotation=0, ha="right", va="center", fontsize=9)
+    if not run.commands:
+        ax.text(0.5, 0.5, "no commands", ha="center", va="center", transform=ax.transAxes)
+        return
+    nan = np.array([c.nan for c in run.commands], dtype=bool)
+    ax.vlines(times[~nan], 0.08, 0.5, color=COMMAND_COLOR, lw=1.0)
+    ax.vlines(times[nan], 0.08, 0.5, color=NAN_COLOR, lw=1.6)
+    last = -math.inf
+    for command, t in zip(run.commands, times.tolist(), strict=True):
+        if t - last >= (span or 1.0) / MAX_TIME_LABELS:
+            color = NAN_COLOR if command.nan else COMMAND_COLOR
+            ax.text(t, 0.55, str(command.number), fontsize=7, color=color, ha="center")
+            last = t

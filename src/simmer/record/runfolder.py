@@ -1,0 +1,389 @@
+"""A run folder: what one run did, kept to look at again, replay and report.
+
+``simmer run --record DIR`` (and :class:`RunRecorder` from Python) keeps in DIR:
+
+- ``manifest.json``, written at the start: SimMeR's version, the whole resolved configuration
+  (every setting and device, as data, with the file it came from), the seed, the clock, speed
+  and link delay, the control program's command line, the platform and the start time;
+  :func:`load_run` rebuilds the configuration from it;
+- ``events.jsonl``, every event as it happens (:mod:`simmer.record.eventlog`);
+- ``trace.csv``, the true pose and the sensors' last readings (:mod:`simmer.record.trace`);
+- ``report.json`` and ``report.md``, written when the run ends: its outcome (the Task 2 time,
+  collisions, path length, commands, NaN replies, final pose) and its facts (seed, length, how
+  it ended); ``report.md`` is in plain words for a lab report and shows ``path.png`` and
+  ``sensors.png`` when ``simmer plot DIR`` has drawn them (:func:`write_report_md`).
+
+The recorder is an observer of the simulation: it writes in the simulation's own thread, as
+each event happens, and nothing else touches the simulation for it. A run is replayable from
+its folder (:func:`load_run`, :func:`simmer.world.replay.replay`) when it was recorded from its
+first step.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import sys
+import time
+from dataclasses import dataclass, replace
+from datetime import datetime
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from types import TracebackType
+from typing import Any, NamedTuple
+
+import simmer
+from simmer.config.models import SimConfig
+from simmer.config.validate import config_from_dict
+from simmer.geometry import Pose, wrap_degrees
+from simmer.record.eventlog import EventLog, read_events
+from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
+from simmer.world.events import Event
+from simmer.world.outcome import Outcome
+from simmer.world.replay import Replayed, replay
+from simmer.world.simulation import Simulation
+
+FORMAT = 1
+"""Version of the run folder's layout, in the manifest; a reader refuses a newer one."""
+MANIFEST = "manifest.json"
+EVENTS = "events.jsonl"
+TRACE = "trace.csv"
+REPORT_JSON = "report.json"
+REPORT_MD = "report.md"
+PLOTS = (("path.png", "The robot's true path"), ("sensors.png", "Sensor readings against time"))
+"""The pictures ``simmer plot DIR`` draws, which report.md shows when they exist."""
+
+ENDINGS = {
+    "quit": "stopped by hand (Esc, closing the window, Ctrl-C or a signal)",
+    "seconds": "the --seconds limit of simulated time was reached",
+    "program": "the control program exited",
+    "timeout": "the --timeout wall-clock limit was reached; the program was stopped",
+    "error": "an error stopped it",
+    "closed": "the recording was closed",
+}
+"""How a run ended, in words, by :attr:`simmer.serve.Served.ended_by` (and two of its own)."""
+
+
+@dataclass(frozen=True)
+class RunSetup:
+    """How a run is driven, for the manifest. The defaults describe a simulation that Python
+    code steps itself."""
+
+    clock: str | None = None
+    """``realtime`` or ``lockstep`` (``simmer run``); None: stepped from Python."""
+    speed: float | None = None
+    """Multiple of real time; None: as fast as possible (or no clock)."""
+    link_delay: float | None = None
+    """Lockstep: simulated seconds each message costs."""
+    program: str | None = None
+    """The control program's command line (``--program``)."""
+    window: bool = False
+
+
+class LoadedRun(NamedTuple):
+    """What a replay needs: ``replay(*load_run(DIR))``."""
+
+    config: SimConfig
+    seed: int
+    events: list[Event]
+
+
+def _finite(value: Any) -> Any:
+    """JSON-ready data: a float that is not finite becomes ``"nan"``, ``"inf"`` or ``"-inf"``
+    (as in events.jsonl), in lists and dictionaries too."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    return value
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+
+def prepare_folder(folder: str | Path) -> Path:
+    """Make the folder (and its parents) for a new run; OSError if that fails, FileExistsError
+    if it already holds a recorded run (which a new one would overwrite)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if (folder / MANIFEST).exists():
+        raise FileExistsError(
+            f"{folder} already holds a recorded run; record into a new folder, or delete it"
+        )
+    return folder
+
+
+# ----------------------------------------------------------------------------- manifest
+
+
+def sensor_ids(config: SimConfig) -> list[str]:
+    """The sensors' ids, in configuration order: the trace's sensor columns."""
+    return [spec.id for spec in config.devices if spec.group == "sensors"]
+
+
+def config_to_manifest(config: SimConfig) -> dict[str, Any]:
+    """The whole resolved configuration as plain data, and where it came from."""
+    source = Path(config.source)
+    is_file = source.is_file()
+    return {
+        "source": config.source,
+        "path": str(source.resolve()) if is_file else None,
+        "base_dir": str(source.resolve().parent if is_file else Path.cwd()),
+        "original": source.suffix == ".py",
+        "origin": config.origin,
+        "warnings": [issue.render(config.source) for issue in config.warnings],
+        "settings": config.settings.model_dump(mode="json"),
+        "devices": [
+            {
+                "id": spec.id,
+                "group": spec.group,
+                "kind": spec.kind,
+                "params": spec.params.model_dump(mode="json"),
+            }
+            for spec in config.devices
+        ],
+    }
+
+
+def config_from_manifest(data: dict[str, Any]) -> SimConfig:
+    """Validate a manifest's configuration again (ConfigError if it no longer validates,
+    e.g. a plug-in file is gone): the same settings and devices as the recorded run's."""
+    raw = dict(data["settings"])
+    for device in data["devices"]:
+        raw.setdefault(device["group"], {})[device["id"]] = device["params"]
+    config = config_from_dict(
+        raw, data["source"], Path(data["base_dir"]), original=bool(data["original"])
+    )
+    return replace(config, origin=data.get("origin", ""))
+
+
+def _versions() -> dict[str, str]:
+    """Versions of the libraries a run's numbers could depend on."""
+    found = {}
+    for name in ("numpy", "numba"):
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
+def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, Any]:
+    """What a run folder says about its run before it starts."""
+    sensors = sensor_ids(sim.config)
+    return {
+        "format": FORMAT,
+        "simmer_version": simmer.__version__,
+        "started": started.isoformat(timespec="seconds"),
+        "seed": sim.seed,
+        "clock": setup.clock,
+        "speed": setup.speed,
+        "link_delay": setup.link_delay,
+        "program": setup.program,
+        "window": setup.window,
+        "argv": sys.argv,
+        "platform": {
+            "python": platform.python_version(),
+            "implementation": platform.python_implementation(),
+            "os": platform.platform(),
+            "machine": platform.machine(),
+            **_versions(),
+        },
+        "trace": {"rate": TRACE_RATE, "columns": trace_columns(sensors)},
+        "config": config_to_manifest(sim.config),
+    }
+
+
+def read_manifest(folder: str | Path) -> dict[str, Any]:
+    """A run folder's manifest (ValueError if it is from a newer SimMeR's layout)."""
+    path = Path(folder) / MANIFEST
+    data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    if data.get("format", 0) > FORMAT:
+        raise ValueError(f"{path} is from a newer SimMeR ({data.get('simmer_version')}); update")
+    return data
+
+
+def load_run(folder: str | Path) -> LoadedRun:
+    """A recorded run's configuration (validated again from the manifest), seed and events."""
+    data = read_manifest(folder)
+    config = config_from_manifest(data["config"])
+    return LoadedRun(config, int(data["seed"]), read_events(Path(folder) / EVENTS))
+
+
+def start_pose(config: SimConfig) -> Pose:
+    """Where a configuration's robot starts."""
+    settings = config.settings
+    return Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+
+
+def retrace(folder: str | Path, path: str | Path) -> Replayed:
+    """Replay a recorded run and write its trace to ``path``: to compare it with the recorded
+    ``trace.csv``, or to write one that ``kill -9`` cut short."""
+    config, seed, events = load_run(folder)
+    writer = TraceWriter(path, sensor_ids(config), config.settings.frame_rate)
+    writer.begin(0.0, 0, start_pose(config))
+    try:
+        return replay(config, seed, events, [writer])
+    finally:
+        writer.close()
+
+
+# ----------------------------------------------------------------------------- report
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f} s"
+
+
+def write_report_md(folder: str | Path) -> Path:
+    """Write ``report.md`` from the folder's report.json and manifest: the outcome in plain
+    words, and ``path.png`` and ``sensors.png`` if they are there (``simmer plot`` calls this
+    again after drawing them)."""
+    folder = Path(folder)
+    info = read_manifest(folder)
+    report = json.loads((folder / REPORT_JSON).read_text(encoding="utf-8"))
+    outcome = report["outcome"]
+    x, y, heading = outcome["final_pose"]
+    reached = f"yes, at {_seconds(outcome['reached_at'])}" if outcome["reached"] else "no"
+    first = outcome["first_collision"]
+    collisions = f"{outcome['collisions']}" + (f" (first at {_seconds(first)})" if first else "")
+    ended = ENDINGS.get(report["ended_by"], report["ended_by"])
+    if report["program_status"] is not None:
+        ended += f" with status {report['program_status']}"
+    program = f", program `{info['program']}`" if info["program"] else ""
+    clock = f", {info['clock']} clock" if info["clock"] else ""
+    started = datetime.fromisoformat(info["started"]).strftime("%Y-%m-%d %H:%M")
+    lines = [
+        f"# SimMeR run: {folder.name}",
+        "",
+        f"Recorded on {started} with SimMeR {info['simmer_version']}: configuration "
+        f"`{info['config']['source']}`, noise seed {info['seed']}{clock}{program}. Times are "
+        "simulated seconds; distances are inches.",
+        "",
+        "| | |",
+        "| --- | --- |",
+        f"| Reached the block | {reached} |",
+        f"| Task 2 time (first motion to the block) | {_seconds(outcome['task2_time'])} |",
+        f"| Collisions | {collisions}; {outcome['blocked_steps']} steps blocked |",
+        f"| Path length | {outcome['path_length']:.1f} in |",
+        f"| Messages, commands | {outcome['messages']}, {outcome['commands']} |",
+        f"| NaN replies | {outcome['nan_replies']} |",
+        f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
+        f"| Length of the run | {report['duration']:.2f} s ({report['steps']} steps), "
+        f"{report['wall_seconds']:.1f} s of wall-clock time |",
+        f"| How it ended | {ended} |",
+        "",
+    ]
+    if report["resets"]:
+        count = report["resets"]
+        times = "once" if count == 1 else f"{count} times"
+        lines += [f"The simulation was reset {times}; the figures count from the last reset.", ""]
+    lines += [
+        f"Files: `{MANIFEST}` (configuration, seed, versions), `{EVENTS}` (every command and "
+        f"reply, in order), `{TRACE}` (pose and sensor readings, {TRACE_RATE:g} rows a "
+        f"second), `{REPORT_JSON}` (these figures).",
+        "",
+    ]
+    plots = [(name, alt) for name, alt in PLOTS if (folder / name).exists()]
+    if plots:
+        lines += ["## Plots", "", *(f"![{alt}]({name})\n" for name, alt in plots)]
+    else:
+        lines += [f"`simmer plot {folder}` adds the path and the sensors' readings here.", ""]
+    path = folder / REPORT_MD
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path
+
+
+# ----------------------------------------------------------------------------- recorder
+
+
+class RunRecorder:
+    """Record ``sim`` into ``folder`` (see the module doc) until :meth:`close`; or use it as a
+    context manager::
+
+        with RunRecorder(sim, "runs/task1"):
+            sim.command("w0-12")
+            sim.run_until_idle()
+
+    ``outcome``: the run's :class:`~simmer.world.outcome.Outcome` if it has one already
+    (otherwise the recorder attaches its own, until :meth:`close`). Raises ValueError if
+    ``sim`` has already stepped (a recording starts at the first step, or it could not be
+    replayed), and FileExistsError or OSError as :func:`prepare_folder` does.
+    """
+
+    def __init__(
+        self,
+        sim: Simulation,
+        folder: str | Path,
+        setup: RunSetup | None = None,
+        outcome: Outcome | None = None,
+    ) -> None:
+        if sim.frame != 0:
+            raise ValueError(
+                f"record a run from its start: the simulation is at step {sim.frame} "
+                "(start recording before stepping it, or after sim.reset())"
+            )
+        self.sim = sim
+        self.folder = prepare_folder(folder)
+        self.setup = setup or RunSetup()
+        self._own_outcome = outcome is None
+        self.outcome = Outcome.attach(sim) if outcome is None else outcome
+        self._wall_start = time.monotonic()
+        self.started = datetime.now().astimezone()
+        _write_json(self.folder / MANIFEST, manifest(sim, self.setup, self.started))
+        self.events = EventLog(self.folder / EVENTS)
+        settings = sim.config.settings
+        self.trace = TraceWriter(self.folder / TRACE, sensor_ids(sim.config), settings.frame_rate)
+        self.trace.begin(sim.time, sim.frame, sim.robot.pose)
+        sim.add_observer(self.events)
+        sim.add_observer(self.trace)
+        self.closed = False
+
+    def close(self, ended_by: str = "closed", program_status: int | None = None) -> None:
+        """Stop recording: close events.jsonl and trace.csv and write the report (again:
+        nothing). ``ended_by`` says how the run ended (a key of :data:`ENDINGS`)."""
+        if self.closed:
+            return
+        self.closed = True
+        sim = self.sim
+        sim.remove_observer(self.events)
+        sim.remove_observer(self.trace)
+        if self._own_outcome:
+            sim.remove_observer(self.outcome)
+        self.events.close()
+        self.trace.close()
+        report = {
+            "simmer_version": simmer.__version__,
+            "config": sim.config.source,
+            "seed": sim.seed,
+            "clock": self.setup.clock,
+            "duration": sim.time,
+            "steps": sim.frame,
+            "wall_seconds": time.monotonic() - self._wall_start,
+            "ended_by": ended_by,
+            "program_status": program_status,
+            "resets": self.trace.resets,
+            "events": self.events.written,
+            "trace_rows": self.trace.rows,
+            "outcome": self.outcome.report().as_dict(),
+        }
+        _write_json(self.folder / REPORT_JSON, report)
+        write_report_md(self.folder)
+
+    def __enter__(self) -> RunRecorder:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        _exc: BaseException | None,
+        _tb: TracebackType | None,
+    ) -> None:
+        if kind is None:
+            self.close()
+        else:
+            self.close("quit" if issubclass(kind, KeyboardInterrupt) else "error")

@@ -1,0 +1,143 @@
+"""``trace.csv``: the true pose and every sensor's last reading, 30 rows per simulated second.
+
+Columns: ``time`` (simulated seconds), ``step``, ``x`` and ``y`` (inches), ``heading``
+(degrees from +y, clockwise), ``collisions`` (so far), then one column per sensor, named by
+its id, holding the last value that sensor answered a command with (blank until its first
+reading; ``nan`` for a NaN reply). Plain numbers, a header row, commas: Excel, pandas
+(``pd.read_csv``) and the ``csv`` module read it as it is. Numbers have 10 significant digits
+(:data:`NUMBER`): a millionth of an inch or a degree, and of a second for runs under two
+hours; exact digits (17 for a noisy reading) would make the file half as large again and the
+rows three times as dear to write. ``events.jsonl`` has every reply exactly.
+
+Why 30 rows a second (:data:`TRACE_RATE`): a row every step (60 a second) doubles the file and
+the cost for nothing a plot or a lab report can see; the robot moves at most 0.2 in between
+two rows at the lab's speeds. A row is written at the first step of every 1/30 s of simulated
+time (every second step at 60 steps a second; every step below 30), plus the start and the
+last step. The time restarts at 0 after a reset (the robot is back at its start).
+
+The file is flushed at most once a wall-clock second (a flush per row would cost a system call
+each), so after ``kill -9`` its last second may be missing; ``events.jsonl`` has every event,
+and a replay (:func:`simmer.record.retrace`) writes the trace again.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from simmer.geometry import Pose
+from simmer.protocol import command_ids
+from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
+
+TRACE_RATE = 30.0
+"""Rows per simulated second (at most one per step)."""
+POSE_COLUMNS = ("time", "step", "x", "y", "heading", "collisions")
+"""The columns before the sensors'."""
+FLUSH_INTERVAL = 1.0
+"""Wall-clock seconds between flushes of the file."""
+NUMBER = "%.10g"
+"""How a number is written (``nan`` and ``inf`` as themselves)."""
+ROW = f"{NUMBER},%d,{NUMBER},{NUMBER},{NUMBER},%d"
+"""A row up to its sensors' columns."""
+MAX_MESSAGES = 1024
+"""Distinct messages whose sensor columns are remembered (a program repeats a few)."""
+
+
+def trace_columns(sensors: Sequence[str]) -> list[str]:
+    """The header row of a trace with these sensor ids."""
+    return [*POSE_COLUMNS, *sensors]
+
+
+class TraceWriter:
+    """An observer writing ``trace.csv`` (see the module doc) for these ``sensors`` (ids) at
+    ``frame_rate`` steps a second."""
+
+    def __init__(self, path: str | Path, sensors: Sequence[str], frame_rate: float) -> None:
+        self.path = Path(path)
+        self._file = self.path.open("w", encoding="utf-8", newline="")
+        self._closed = False
+        self._file.write(",".join(trace_columns(sensors)) + "\n")
+        self._column = {sensor: i for i, sensor in enumerate(sensors)}
+        self._readings: list[float | None] = [None] * len(sensors)
+        self._readings_text = "," * len(sensors) + "\n"
+        """The end of a row: the readings, written again only when one changes."""
+        self._changed = False
+        self._columns_of: dict[str, tuple[tuple[int, int], ...]] = {}
+        self._rows_per_step = min(1.0, TRACE_RATE / frame_rate)
+        self._next_row = 0
+        """The step that writes the next row."""
+        self._collisions = 0
+        self._last: StepEvent | None = None
+        self._flush_at = time.monotonic() + FLUSH_INTERVAL
+        self.rows = 0
+        """Rows written so far (without the header)."""
+        self.resets = 0
+        """Resets seen (each puts the time back to 0)."""
+
+    def begin(self, time_s: float, step: int, pose: Pose) -> None:
+        """Write the row of the state the run starts from (before its first step)."""
+        self._row(time_s, step, pose)
+
+    def __call__(self, event: Event) -> None:
+        """Observe one event: a step may make a row; commands, collisions and resets change
+        what the next row says."""
+        if type(event) is StepEvent:
+            if event.step >= self._next_row:
+                self._row(event.time, event.step, event.pose)
+                self._last = None
+            else:
+                self._last = event
+        elif isinstance(event, CommandEvent):
+            self._command(event)
+        elif isinstance(event, CollisionEvent):
+            self._collisions += 1
+        elif isinstance(event, ResetEvent):
+            self.resets += 1
+            self._collisions = 0
+            self._readings = [None] * len(self._readings)
+            self._changed = True
+            self._next_row = 0
+            self._last = None
+
+    def _command(self, event: CommandEvent) -> None:
+        """Keep the reply of each command addressed to a sensor."""
+        columns = self._columns_of.get(event.message)
+        if columns is None:
+            ids = command_ids(event.message)
+            columns = tuple((i, self._column[d]) for i, d in enumerate(ids) if d in self._column)
+            if len(self._columns_of) >= MAX_MESSAGES:
+                self._columns_of.clear()
+            self._columns_of[event.message] = columns
+        replies = event.replies
+        for reply, column in columns:
+            if reply < len(replies):
+                self._readings[column] = replies[reply]
+                self._changed = True
+
+    def _row(self, time_s: float, step: int, pose: Pose) -> None:
+        if self._closed:  # a simulation thread that outlived the run
+            return
+        if self._changed:
+            self._changed = False
+            texts = ["" if value is None else NUMBER % value for value in self._readings]
+            self._readings_text = "".join("," + text for text in texts) + "\n"
+        row = ROW % (time_s, step, *pose, self._collisions) + self._readings_text
+        self._file.write(row)  # one write: a Ctrl-C cannot leave half a row
+        # the first step of the next 1/30 s: one whose step x rate reaches the next whole number
+        tick = math.floor(step * self._rows_per_step + 1e-6)
+        self._next_row = math.ceil((tick + 1 - 1e-6) / self._rows_per_step)
+        self.rows += 1
+        if time.monotonic() >= self._flush_at:
+            self._file.flush()
+            self._flush_at = time.monotonic() + FLUSH_INTERVAL
+
+    def close(self) -> None:
+        """Write the last step's row if it has none yet, and close the file (again: nothing)."""
+        if self._closed:
+            return
+        if self._last is not None:
+            self._row(self._last.time, self._last.step, self._last.pose)
+        self._closed = True
+        self._file.close()
