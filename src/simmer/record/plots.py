@@ -367,12 +367,17 @@ def _position(value: Any) -> tuple[float, float] | None:
 
 
 def plot_run(folder: str | Path) -> list[Path]:
-    """Write ``path.png`` and ``sensors.png`` into a run folder and link them from its
-    ``report.md`` (if there is one and it does not yet); return the files written."""
+    """Write ``path.png`` and ``sensors.png`` into a run folder and show them in its
+    ``report.md``: written again from ``report.json`` for a recorded run, else linked from a
+    ``report.md`` of some other origin if it does not show them yet; return the files written."""
+    from simmer.record.runfolder import REPORT_JSON, write_report_md
+
     run = read_run(folder)
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
     write_path_plot(run, path)
     write_sensor_plot(run, sensors)
+    if (run.folder / REPORT_JSON).is_file():
+        return [path, sensors, write_report_md(run.folder)]
     return [path, sensors, report] if link_from_report(report, IMAGES) else [path, sensors]
 
 

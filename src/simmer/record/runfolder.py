@@ -250,7 +250,8 @@ def write_report_md(folder: str | Path) -> Path:
     x, y, heading = outcome["final_pose"]
     reached = f"yes, at {_seconds(outcome['reached_at'])}" if outcome["reached"] else "no"
     first = outcome["first_collision"]
-    collisions = f"{outcome['collisions']}" + (f" (first at {_seconds(first)})" if first else "")
+    later = f" (first at {_seconds(first)})" if first is not None else ""
+    collisions = f"{outcome['collisions']}{later}"
     ended = ENDINGS.get(report["ended_by"], report["ended_by"])
     if report["program_status"] is not None:
         ended += f" with status {report['program_status']}"
