@@ -422,6 +422,75 @@ def plot(
         out.print(f"wrote {path}", markup=False)
 
 
+class Engine(StrEnum):
+    """Choices of ``simmer sweep --engine``."""
+
+    local = "local"
+    dask = "dask"
+
+
+@app.command()
+def sweep(
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (.toml).")],
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "-o",
+            "--output",
+            help="Folder for results.csv and summary.md.  "
+            "[default: SWEEP-results beside the sweep file]",
+            show_default=False,
+        ),
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="Worker processes (default: one per core).", min=1, show_default=False),
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option(help="Keep the runs already in results.csv; run only the others.")
+    ] = False,
+    engine: Annotated[Engine, typer.Option(help="Where runs go: local processes or Dask.")] = (
+        Engine.local
+    ),
+    address: Annotated[
+        str | None,
+        typer.Option(help="Dask scheduler (tcp://host:8786); none: a local Dask cluster."),
+    ] = None,
+) -> None:
+    """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
+    summary.md (success rate per setting with 95% intervals)."""
+    from simmer.sweep import SweepError, dask_engine, load_sweep, local_pool, run_sweep
+
+    try:
+        spec = load_sweep(sweep_file)
+        chosen = dask_engine(address, workers) if engine is Engine.dask else local_pool(workers)
+    except (SweepError, RuntimeError) as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    folder = output or sweep_file.parent / f"{sweep_file.stem}-results"
+    try:
+        done = run_sweep(
+            spec,
+            folder,
+            engine=chosen,
+            workers=workers,
+            resume=resume,
+            console=err,
+            source=sweep_file.name,
+        )
+    except (FileExistsError, ValueError) as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    except KeyboardInterrupt:
+        err.print(f"stopped; finished runs are in {folder / 'results.csv'} (--resume goes on)")
+        raise typer.Exit(130) from None
+    out.print(
+        f"{done.successes}/{done.runs} succeeded ({done.ran} run now, {done.wall_time:.1f} s); "
+        f"wrote {folder / 'results.csv'} and {folder / 'summary.md'}",
+        markup=False,
+    )
+
+
 @app.command()
 def console(
     host: Annotated[str, typer.Option(help="Simulator address.")] = "127.0.0.1",
