@@ -33,6 +33,17 @@ def default_data() -> dict[str, Any]:
     return copy.deepcopy(tomllib.loads(text))
 
 
+def noisy_data() -> dict[str, Any]:
+    """The default rover with the lab's noise: sensor error, drive error and a curving bias."""
+    data = default_data()
+    for sensor in data["sensors"].values():
+        sensor["error"] = 0.05
+    data["drives"]["w0"]["error"] = {"x": 0.02, "y": 0.05, "rotation": 1}
+    data["drives"]["w0"]["bias"] = {"rotation": 0.2}
+    data["drives"]["r0"]["error"] = {"x": 0.003, "y": 0.003, "rotation": 0.02}
+    return data
+
+
 def make_config(data: dict[str, Any]) -> SimConfig:
     """Validate configuration data."""
     return config_from_dict(data, "<test>", REPO)

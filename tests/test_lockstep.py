@@ -18,7 +18,7 @@ from simmer.serve import serve
 from simmer.transport.local import LocalLink
 from simmer.world.events import CommandEvent, Event, StepEvent
 
-from helpers import EXAMPLES, REPO, default_data, make_config
+from helpers import EXAMPLES, REPO, make_config, noisy_data
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -29,12 +29,7 @@ from program import drive_around  # noqa: E402
 
 def noisy_sim() -> Simulation:
     """The default rover with noisy drives and sensors, seeded."""
-    data = default_data()
-    for sensor in data["sensors"].values():
-        sensor["error"] = 0.05
-    data["drives"]["w0"]["error"] = {"x": 0.02, "y": 0.05, "rotation": 1}
-    data["drives"]["r0"]["error"] = {"x": 0.003, "y": 0.003, "rotation": 0.02}
-    return Simulation(make_config(data), seed=17)
+    return Simulation(make_config(noisy_data()), seed=17)
 
 
 class Fingerprint:

@@ -19,17 +19,11 @@ from simmer.world.events import (
 )
 from simmer.world.replay import replay
 
-from helpers import LAB_SEQUENCE, default_data, make_config
+from helpers import LAB_SEQUENCE, make_config, noisy_data
 
 
 def noisy_config() -> SimConfig:
-    data = default_data()
-    for sensor in data["sensors"].values():
-        sensor["error"] = 0.05
-    data["drives"]["w0"]["error"] = {"x": 0.02, "y": 0.05, "rotation": 1}
-    data["drives"]["w0"]["bias"] = {"rotation": 0.2}
-    data["drives"]["r0"]["error"] = {"x": 0.003, "y": 0.003, "rotation": 0.02}
-    return make_config(data)
+    return make_config(noisy_data())
 
 
 def a_noisy_run(events: list[Event]) -> Simulation:

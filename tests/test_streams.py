@@ -4,21 +4,10 @@ own id only, so adding a device, or polling a drive, never shifts another device
 from __future__ import annotations
 
 import math
-from typing import Any
 
 from simmer import Simulation
 
-from helpers import default_data, make_sim
-
-
-def noisy() -> dict[str, Any]:
-    """The default rover with noisy ultrasonics and drives."""
-    data = default_data()
-    for sensor in data["sensors"].values():
-        sensor["error"] = 0.05
-    data["drives"]["w0"]["error"] = {"x": 0.02, "y": 0.05, "rotation": 1}
-    data["drives"]["r0"]["error"] = {"x": 0.003, "y": 0.003, "rotation": 0.02}
-    return data
+from helpers import make_sim, noisy_data
 
 
 def readings(sim: Simulation, polls: bool = False) -> list[float]:
@@ -38,24 +27,25 @@ def readings(sim: Simulation, polls: bool = False) -> list[float]:
 
 
 def test_same_seed_same_run_other_seed_other_run() -> None:
-    assert readings(make_sim(noisy(), seed=4)) == readings(make_sim(noisy(), seed=4))
-    assert readings(make_sim(noisy(), seed=4)) != readings(make_sim(noisy(), seed=5))
+    assert readings(make_sim(noisy_data(), seed=4)) == readings(make_sim(noisy_data(), seed=4))
+    assert readings(make_sim(noisy_data(), seed=4)) != readings(make_sim(noisy_data(), seed=5))
 
 
 def test_adding_a_sensor_does_not_change_the_others_noise() -> None:
-    more = noisy()
+    more = noisy_data()
     more["sensors"]["g0"] = {"type": "gyroscope", "error": 0.2, "bias": 0.1}
     more["sensors"]["c0"] = {"type": "compass", "error": 0.01}
     with_gyro = make_sim(more, seed=9)
-    assert readings(with_gyro) == readings(make_sim(noisy(), seed=9))
+    assert readings(with_gyro) == readings(make_sim(noisy_data(), seed=9))
 
 
 def test_polls_and_refused_drives_draw_nothing() -> None:
-    assert readings(make_sim(noisy(), seed=3), polls=True) == readings(make_sim(noisy(), seed=3))
+    polled = readings(make_sim(noisy_data(), seed=3), polls=True)
+    assert polled == readings(make_sim(noisy_data(), seed=3))
 
 
 def test_drawn_biases_come_from_their_own_streams() -> None:
-    data = noisy() | {"rand_bias": True, "bias_strength": [0.05, 0.5]}
+    data = noisy_data() | {"rand_bias": True, "bias_strength": [0.05, 0.5]}
     first = make_sim(data, seed=11).robot.drives["w0"].bias
     more = data | {"sensors": {**data["sensors"], "g0": {"type": "gyroscope"}}}
     assert make_sim(more, seed=11).robot.drives["w0"].bias == first
