@@ -245,6 +245,14 @@ def run(
             show_default=False,
         ),
     ] = None,
+    video: Annotated[
+        Path | None,
+        typer.Option(
+            help="Record what the window shows into this .mp4 (H.264) or .gif file, at 30 "
+            "frames per simulated second, with or without a window.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -261,6 +269,8 @@ def run(
         pace = parse_speed(speed)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    if video is not None:
+        _check_video(video)
     if program is not None:  # this run's own free ports, so that runs can share a machine
         port_rx = 0 if port_rx is None else port_rx
         port_tx = 0 if port_tx is None else port_tx
@@ -323,6 +333,7 @@ def run(
             link_delay=link_delay,
             timeout=timeout,
             record=record,
+            video=video,
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -344,6 +355,24 @@ def run(
             ended = "the run was stopped"
         out.print(f"run ended: {ended}; log: {log_file}", markup=False)
     raise typer.Exit(served.exit_status)
+
+
+def _check_video(path: Path) -> None:
+    """Refuse a video file that cannot be written before any port opens."""
+    from simmer.ui.video import check_video_path
+
+    try:
+        check_video_path(path)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--video") from None
+    folder = path.parent
+    if not folder.is_dir() or not os.access(folder, os.W_OK):
+        err.print(
+            f"cannot write the video {path}: no writable folder {folder}",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)
 
 
 def _log_to_file() -> Path:

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
 from simmer.record import RunRecorder, RunSetup
@@ -20,6 +21,9 @@ from simmer.transport import STREAM_PORT, Link
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
+
+if TYPE_CHECKING:
+    from simmer.ui.video import VideoRecorder
 
 log = logging.getLogger("simmer.serve")
 
@@ -114,13 +118,16 @@ def serve(
     link_delay: float | None = None,
     timeout: float | None = None,
     record: Path | None = None,
+    video: Path | None = None,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
     program's command line, started here on this run's ports) exits, or ``timeout`` wall
     seconds pass; with a window or headless, in real time or in ``lockstep``. With ``record``
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
-    ends, however it ends.
+    ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
+    recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
+    with a window or headless, and the file is finished however the run ends.
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
     ``record`` folder cannot be written (FileExistsError if it holds a run already), and
@@ -134,6 +141,7 @@ def serve(
     started: Program | None = None
     restore_signals = _stop_on_signals()
     recorder: RunRecorder | None = None
+    filming: VideoRecorder | None = None
     try:
         link = Link(
             runner.bus,
@@ -152,6 +160,11 @@ def serve(
                 setup = RunSetup(clock, speed, delay, program, window)
                 recorder = RunRecorder(sim, record, setup, outcome)
                 echo(f"recording the run into {record}")
+            if video is not None:
+                from simmer.ui.video import VideoRecorder
+
+                filming = VideoRecorder(sim, video, controls=runner)
+                echo(f"recording a video into {video}")
             for line in link.describe():
                 echo(line)
             if lockstep:
@@ -184,6 +197,8 @@ def serve(
         runner.bus.close()
         if started is not None:
             started.stop()
+        if filming is not None:
+            _finish_video(filming, echo)
         restore_signals()
     status = started.process.returncode if started is not None and ended[0] == "program" else None
     if status is not None:  # here, in the thread that owns the simulation
@@ -192,6 +207,17 @@ def serve(
     if recorder is not None:
         recorder.close(served.ended_by, status)
     return served
+
+
+def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
+    """Finish the video file and say how long it is, or why it could not be written."""
+    try:
+        filming.close()
+    except Exception as exc:  # the run itself went well: say so, and keep its outcome
+        log.error("the video %s could not be written: %s", filming.path, exc)
+        echo(f"the video {filming.path} could not be written: {exc}")
+    else:
+        echo(f"video: {filming.path} ({filming.frames} frames, {filming.seconds:.2f} s)")
 
 
 def _start_program(

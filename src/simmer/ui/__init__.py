@@ -5,7 +5,10 @@ thread: it draws immutable :class:`~simmer.ui.snapshot.Snapshot` values and turn
 into actions (manual driving, pausing, resetting, dragging) that a
 :class:`~simmer.ui.bridge.Bridge` applies in the simulation thread, so drawing never delays a
 command's reply. Drawing goes through the small :class:`~simmer.ui.render.Renderer` interface, so
-tests can record the draw calls without a window.
+tests can record the draw calls without a window. The
+:class:`~simmer.ui.offscreen.OffscreenRenderer` draws a snapshot on any surface, without a
+display: the window uses it, and so does :class:`~simmer.ui.video.VideoRecorder`, which records
+what the window shows into an MP4 or GIF at a fixed rate in simulated time.
 """
 
 from __future__ import annotations
@@ -15,19 +18,23 @@ import os
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 from simmer.ui.bridge import Bridge
+from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.render import PygameRenderer, RecordingRenderer, Renderer
 from simmer.ui.scene import ScenePainter, View
 from simmer.ui.snapshot import Snapshot, StaticScene
+from simmer.ui.video import VideoRecorder
 from simmer.ui.window import Window, render_scene, run_window
 
 __all__ = [
     "Bridge",
+    "OffscreenRenderer",
     "PygameRenderer",
     "RecordingRenderer",
     "Renderer",
     "ScenePainter",
     "Snapshot",
     "StaticScene",
+    "VideoRecorder",
     "View",
     "Window",
     "render_scene",

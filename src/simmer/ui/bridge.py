@@ -13,18 +13,38 @@ Tests can run both sides in one thread (post, ``sync``, draw) for determinism.
 
 from __future__ import annotations
 
+import logging
 import queue
 import threading
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from pathlib import Path
 
 from simmer.geometry import FloatArray, Pose
-from simmer.ui.hud import CommandLog
-from simmer.ui.snapshot import RobotLayout, Snapshot, StaticScene, frozen_array
+from simmer.ui.maker import Controls, LocalControls, SnapshotMaker
+from simmer.ui.snapshot import Snapshot, StaticScene, frozen_array
+from simmer.ui.video import VideoRecorder
 from simmer.world import Simulation
-from simmer.world.events import Observer
-from simmer.world.outcome import Outcome
+
+__all__ = [
+    "SPEEDS",
+    "Action",
+    "Bridge",
+    "ChangeSpeed",
+    "Controls",
+    "EndDrag",
+    "HoldKeys",
+    "LocalControls",
+    "PlaceRobot",
+    "Quit",
+    "Reset",
+    "StepOnce",
+    "TogglePause",
+    "ToggleVideo",
+    "faster",
+    "slower",
+]
+
+log = logging.getLogger("simmer.ui")
 
 SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0)
 """The speed factors ``+`` and ``-`` step through."""
@@ -42,36 +62,6 @@ def slower(speed: float | None) -> float:
     if speed is None:
         return SPEEDS[-1]
     return next((s for s in reversed(SPEEDS) if s < speed * 0.999), SPEEDS[0])
-
-
-class Controls(Protocol):
-    """What the bridge asks of the loop that steps the simulation (the Runner has these)."""
-
-    paused: bool
-    speed: float | None
-
-    @property
-    def clients(self) -> Sequence[str] | None:
-        """Connected clients (None: nothing is served)."""
-        ...
-
-    def step_once(self) -> None:
-        """Advance one step."""
-        ...
-
-
-@dataclass
-class LocalControls:
-    """Pause and speed state when no runner drives the simulation (tests, off-screen drawing)."""
-
-    sim: Simulation
-    paused: bool = False
-    speed: float | None = 1.0
-    clients: Sequence[str] | None = None
-
-    def step_once(self) -> None:
-        """Advance one step."""
-        self.sim.step()
 
 
 # ----------------------------------------------------------------- actions
@@ -121,11 +111,29 @@ class EndDrag:
 
 
 @dataclass(frozen=True)
+class ToggleVideo:
+    """Start recording a video into ``path`` (``.mp4`` or ``.gif``), or stop the recording
+    going on."""
+
+    path: Path
+
+
+@dataclass(frozen=True)
 class Quit:
     """Stop the simulation loop."""
 
 
-Action = HoldKeys | Reset | TogglePause | StepOnce | ChangeSpeed | PlaceRobot | EndDrag | Quit
+Action = (
+    HoldKeys
+    | Reset
+    | TogglePause
+    | StepOnce
+    | ChangeSpeed
+    | PlaceRobot
+    | EndDrag
+    | ToggleVideo
+    | Quit
+)
 
 
 class Bridge:
@@ -141,25 +149,15 @@ class Bridge:
         """Configuration and maze: safe to read from any thread."""
         self.local = LocalControls(sim)
         """Pause and speed when :meth:`sync` is called without a runner."""
-        outcome = next((o for o in sim.observers if isinstance(o, Outcome)), None)
-        self._attached: list[Observer] = []
-        """The observers this bridge added (and removes on :meth:`close`)."""
-        if outcome is None:
-            outcome = Outcome(sim)
-            self._attached.append(outcome)
-        self.outcome = outcome
-        """The run's outcome the HUD shows: the one already following ``sim`` (a served run
-        reports the same figures at its end), else the bridge's own."""
-        self.commands = CommandLog()
-        self._attached.append(self.commands)
-        for observer in self._attached:
-            sim.add_observer(observer)
+        self.maker = SnapshotMaker(sim)
+        self.outcome = self.maker.outcome
+        """The run's outcome the HUD shows (see :attr:`SnapshotMaker.outcome`)."""
         self._actions: queue.SimpleQueue[Action] = queue.SimpleQueue()
         self._ghost: FloatArray | None = None
-        self._robot = sim.robot
-        self._layout = RobotLayout.of(sim.robot)
+        self.video: VideoRecorder | None = None
+        """The video being recorded from the window (key V), if one is."""
         self._fresh = threading.Event()
-        self.latest: Snapshot = self._snapshot(self.local)
+        self.latest: Snapshot = self.maker.snapshot(self.local)
         """The newest snapshot (replaced whole, never changed)."""
 
     # ----------------------------------------------------------------- the window side
@@ -195,7 +193,8 @@ class Bridge:
                 keep_running = False
             else:
                 self._apply(action, ctl)
-        self.latest = self._snapshot(ctl)
+        recording = self.video.path.name if self.video is not None else None
+        self.latest = self.maker.snapshot(ctl, self._ghost, recording)
         self._fresh.set()
         return keep_running
 
@@ -221,25 +220,33 @@ class Bridge:
                 self._ghost = frozen_array(sim.robot.polygon(target).copy())
         elif isinstance(action, EndDrag):
             self._ghost = None
+        elif isinstance(action, ToggleVideo):
+            if self.video is None:
+                self._start_video(action.path, ctl)
+            else:
+                self._stop_video()
 
-    def _snapshot(self, ctl: Controls) -> Snapshot:
-        sim = self.sim
-        if sim.robot is not self._robot:  # after a reset
-            self._robot = sim.robot
-            self._layout = RobotLayout.of(sim.robot)
-        return Snapshot.of(
-            sim,
-            self._layout,
-            paused=ctl.paused,
-            speed=ctl.speed,
-            outcome=self.outcome.report(),
-            commands=self.commands.entries,
-            clients=ctl.clients,
-            ghost=self._ghost,
-        )
+    def _start_video(self, path: Path, ctl: Controls) -> None:
+        try:
+            self.video = VideoRecorder(self.sim, path, controls=ctl)
+        except (OSError, ValueError) as exc:
+            log.error("cannot record a video into %s: %s", path, exc)
+        else:
+            log.info("recording a video into %s (V stops it)", path)
+
+    def _stop_video(self) -> None:
+        video, self.video = self.video, None
+        if video is None:
+            return
+        try:
+            video.close()
+        except Exception as exc:  # the window goes on
+            log.error("the video %s could not be written: %s", video.path, exc)
+        else:
+            log.info("saved the video %s (%.2f s)", video.path, video.seconds)
 
     def close(self) -> None:
-        """Stop observing the simulation (once its thread has stopped)."""
-        for observer in self._attached:
-            if observer in self.sim.observers:
-                self.sim.observers.remove(observer)
+        """Finish a video being recorded and stop observing the simulation (once its thread
+        has stopped)."""
+        self._stop_video()
+        self.maker.close()

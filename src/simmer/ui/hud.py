@@ -28,6 +28,8 @@ LIT: Color = (255, 210, 0)
 UNLIT: Color = (60, 70, 70)
 ALARM: Color = (255, 90, 90)
 BOX: Color = (20, 30, 30)
+HUD_COLORS = (TEXT, DIM, LIT, UNLIT, ALARM, BOX, (0, 0, 0), (255, 255, 255))
+"""Every flat colour the HUD paints with (the heartbeat fades between the last and UNLIT)."""
 SWITCHED_OFF_SHOWN = 3
 """At most this many switched-off devices are named on screen (all of them are in the log)."""
 
@@ -41,6 +43,8 @@ HELP = (
     ("R", "reset robot, block, sensors and the outcome"),
     ("left-drag", "move the robot (refused onto a wall)"),
     ("right-drag", "turn the robot"),
+    ("V", "start / stop a video (simmer-*.mp4 here)"),
+    ("P", "screenshot (simmer-*.png here)"),
     ("H", "show / hide this help"),
     ("Esc", "quit (or close the window)"),
 )
@@ -202,6 +206,9 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
     if snap.switched_off:
         paint_switched_off(r, snap.switched_off)
+    if snap.recording is not None:  # the file's name is in the log
+        r.draw_circle((18, 102), 5, ALARM)
+        r.draw_text("REC", (28, 95), ALARM, 18)
 
 
 def stopwatch_text(outcome: OutcomeReport) -> tuple[str, Color]:
@@ -251,7 +258,7 @@ def paint_help(r: Renderer, size: tuple[int, int]) -> None:
     width, height = 560, 44 + 26 * len(HELP)
     x0 = max(0, (size[0] - width) // 2)
     y0 = max(PANEL_HEIGHT, (size[1] - height) // 2)
-    r.draw_rect((x0, y0, width, height), (20, 30, 30))
+    r.draw_rect((x0, y0, width, height), BOX)
     r.draw_rect((x0, y0, width, height), LIT, 2)
     r.draw_text("Keys and mouse", (x0 + 16, y0 + 12), LIT, 24)
     for i, (key, what) in enumerate(HELP):

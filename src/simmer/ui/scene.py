@@ -96,6 +96,26 @@ class ScenePainter:
         self.maze = scene.maze
         self.robot_fill = tint(settings.robot_color, 0.75)
         self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
+        self.panel_color = tint(settings.background_color, 0.6, (0, 0, 0))
+        self.block_edge = tint(settings.block_color, 0.5, (0, 0, 0))
+
+    def colors(self) -> list[Color]:
+        """The flat colours this painter paints with (a GIF's palette keeps them exact)."""
+        settings = self.settings
+        return [
+            settings.background_color,
+            self.panel_color,
+            WHITE_TILE,
+            BLACK_TILE,
+            self.solid_color,
+            settings.wall_color,
+            RULER_COLOR,
+            settings.block_color,
+            self.block_edge,
+            settings.robot_color,
+            self.robot_fill,
+            GHOST_COLOR,
+        ]
 
     # ----------------------------------------------------------------- static layer
 
@@ -104,7 +124,7 @@ class ScenePainter:
         settings = self.settings
         maze = self.maze
         r.fill(settings.background_color)
-        r.draw_rect((0, 0, size[0], PANEL_HEIGHT), tint(settings.background_color, 0.6, (0, 0, 0)))
+        r.draw_rect((0, 0, size[0], PANEL_HEIGHT), self.panel_color)
         tile = maze.tile
         rows, cols = maze.floor_white.shape
         xs = [round(view.ox + min(c * tile, maze.width) * view.ppi) for c in range(cols + 1)]
@@ -150,11 +170,7 @@ class ScenePainter:
         settings = self.settings
         block_px = view.points(snap.block)
         r.draw_polygon(block_px, settings.block_color)
-        r.draw_polygon(
-            block_px,
-            tint(settings.block_color, 0.5, (0, 0, 0)),
-            view.width(settings.block_thickness),
-        )
+        r.draw_polygon(block_px, self.block_edge, view.width(settings.block_thickness))
         layout = snap.layout
         points = view.points(snap.robot)
         body = points[: layout.body]

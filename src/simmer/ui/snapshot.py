@@ -135,6 +135,8 @@ class Snapshot:
     """Where a refused drag would have put the robot's outline."""
     switched_off: tuple[tuple[str, str], ...] = ()
     """(device id, reason) of each device switched off because its code raised."""
+    recording: str | None = None
+    """The name of the video the window is recording, if it is."""
 
     @property
     def outline(self) -> FloatArray:
@@ -153,6 +155,7 @@ class Snapshot:
         commands: Sequence[CommandEvent] = (),
         clients: Sequence[str] | None = None,
         ghost: FloatArray | None = None,
+        recording: str | None = None,
     ) -> Snapshot:
         """Read a simulation now (only in the thread that owns it)."""
         robot = sim.robot
@@ -175,4 +178,5 @@ class Snapshot:
             clients=tuple(clients) if clients is not None else None,
             ghost=ghost,
             switched_off=tuple(sim.switched_off.items()),
+            recording=recording,
         )

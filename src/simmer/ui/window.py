@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,11 +41,11 @@ from simmer.ui.bridge import (
     Reset,
     StepOnce,
     TogglePause,
+    ToggleVideo,
     faster,
     slower,
 )
-from simmer.ui.hud import paint_help, paint_hud, paint_hud_static
-from simmer.ui.render import PygameRenderer, TextCache, merge_rects
+from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.ui.snapshot import Snapshot
 from simmer.world import Simulation
@@ -62,7 +63,6 @@ __all__ = [
     "render_scene",
     "run_window",
     "slower",
-    "static_layer",
 ]
 
 log = logging.getLogger("simmer.ui")
@@ -99,6 +99,7 @@ class Window:
     """Draws a bridge's snapshots and turns keys and mouse into actions posted to it.
 
     ``surface``: draw there instead of opening a window (off-screen rendering, benchmarks).
+    ``save_dir``: where V records videos and P saves screenshots (default: the current folder).
     """
 
     def __init__(
@@ -107,11 +108,12 @@ class Window:
         *,
         size: tuple[int, int] | None = None,
         surface: pygame.Surface | None = None,
+        save_dir: Path | None = None,
     ) -> None:
         self.bridge = bridge
+        self.save_dir = save_dir
         self.scene = bridge.scene
-        pygame.display.init()
-        self.text = TextCache()
+        pygame.display.init()  # the event queue, even when drawing on a given surface
         self._own_display = surface is None
         if surface is None:
             pygame.display.set_caption(f"SimMeR - {self.scene.config.source}")
@@ -119,30 +121,23 @@ class Window:
                 size or default_window_size(self.scene), pygame.RESIZABLE
             )
         self.screen = surface
-        self.renderer = PygameRenderer(surface, self.text)
-        self.painter = ScenePainter(self.scene)
+        self.canvas = OffscreenRenderer(self.scene, surface)
+        """Draws the snapshots on :attr:`screen`: the same code as the video's frames."""
         self.held: set[str] = set()
         self.show_help = False
         self.drag: Drag | None = None
-        self.static = pygame.Surface((1, 1))
-        self.view = View(1.0, 0.0, 0.0)
-        self._drawn: list[pygame.Rect] = []  # what the last frame drew over the static layer
         self._updated: list[pygame.Rect] | None = None  # to show on screen; None: everything
         self._shown: Snapshot | None = None  # the snapshot on screen, if nothing else changed
-        self.layout()
 
-    # ----------------------------------------------------------------- layout
+    @property
+    def view(self) -> View:
+        """Where the maze sits on the screen."""
+        return self.canvas.view
 
-    def layout(self) -> None:
-        """Fit the scene to the current surface size and repaint the cached static layer."""
-        size = self.screen.get_size()
-        self.view = View.fit(self.scene, size)
-        self.static = static_layer(size, self.screen)
-        static = PygameRenderer(self.static, self.text)
-        self.painter.paint_static(static, self.view, size)
-        paint_hud_static(static, self.scene, size[0])
-        self._drawn = [self.static.get_rect()]
-        self._shown = None
+    @property
+    def painter(self) -> ScenePainter:
+        """The scene painter."""
+        return self.canvas.painter
 
     # ----------------------------------------------------------------- one frame
 
@@ -162,30 +157,11 @@ class Window:
         return True
 
     def draw(self, snap: Snapshot | None = None) -> None:
-        """Draw a snapshot (default: the bridge's latest) on the surface, without a flip.
-
-        Only what the previous frame drew is restored from the cached static layer, so a frame
-        costs the size of the robot, rays and HUD values, not of the window.
-        """
+        """Draw a snapshot (default: the bridge's latest) on the surface, without a flip
+        (:meth:`OffscreenRenderer.draw <simmer.ui.offscreen.OffscreenRenderer.draw>`)."""
         if snap is None:
             snap = self.bridge.latest
-        screen = self.screen
-        static = self.static
-        previous = self._drawn
-        everything = previous == [static.get_rect()]
-        if everything:
-            screen.blit(static, (0, 0))
-        else:
-            for rect in previous:
-                screen.blit(static, rect, rect)
-        r = self.renderer
-        r.dirty.clear()
-        self.painter.paint_dynamic(r, self.view, snap)
-        paint_hud(r, snap)
-        if self.show_help:
-            paint_help(r, screen.get_size())
-        self._drawn = merge_rects(r.dirty)
-        self._updated = None if everything else previous + self._drawn
+        self._updated = self.canvas.draw(snap, show_help=self.show_help)
         self._shown = snap
 
     # ----------------------------------------------------------------- events
@@ -205,11 +181,10 @@ class Window:
             self.held.clear()
             self.bridge.post(HoldKeys(frozenset()))
         elif kind == pygame.WINDOWEXPOSED:
-            self._drawn = [self.static.get_rect()]  # redraw and show the whole window
+            self.canvas.invalidate()  # redraw and show the whole window
         elif kind == pygame.VIDEORESIZE and self._own_display:
             self.screen = pygame.display.get_surface() or self.screen
-            self.renderer.surface = self.screen
-            self.layout()
+            self.canvas.use(self.screen)
         elif kind == pygame.MOUSEBUTTONDOWN and event.button in (1, 3):
             self._drag_start(event.pos, event.button)
         elif kind == pygame.MOUSEMOTION and self.drag is not None:
@@ -241,7 +216,29 @@ class Window:
             self.reset()
         elif key == pygame.K_h:
             self.show_help = not self.show_help
+        elif key == pygame.K_v:
+            post(ToggleVideo(self._new_file(".mp4")))  # the path is used if none is recording
+        elif key == pygame.K_p:
+            self.screenshot()
         return True
+
+    def screenshot(self) -> Path:
+        """Save what the window shows as a PNG in :attr:`save_dir`; its path."""
+        path = self._new_file(".png")
+        pygame.image.save(self.screen, str(path))
+        log.info("saved a screenshot: %s", path)
+        return path
+
+    def _new_file(self, suffix: str) -> Path:
+        """``simmer-<date>-<time><suffix>`` in :attr:`save_dir`, numbered if taken."""
+        folder = self.save_dir if self.save_dir is not None else Path.cwd()
+        stem = time.strftime("simmer-%Y%m%d-%H%M%S")
+        path = folder / f"{stem}{suffix}"
+        number = 1
+        while path.exists():
+            number += 1
+            path = folder / f"{stem}-{number}{suffix}"
+        return path
 
     def reset(self) -> None:
         """Ask for robot, block, devices, time and outcome back at the start; keys released."""
@@ -326,30 +323,16 @@ class Window:
             pygame.display.quit()
 
 
-def static_layer(size: tuple[int, int], like: pygame.Surface) -> pygame.Surface:
-    """A surface for the cached static layer, in ``like``'s pixel format.
-
-    It is a subsurface one pixel into a slightly wider surface: when source and destination
-    rows start at the same offset within a memory page, SDL's row copies run into 4K aliasing
-    and restoring a rectangle costs up to 20 times more (measured: a 33 × 64 px restore took
-    23 µs instead of 0.5 µs; a full-window copy 364 µs instead of 154 µs).
-    """
-    parent = pygame.Surface((size[0] + 1, size[1]), 0, like)
-    return parent.subsurface((1, 0, size[0], size[1]))
-
-
 def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surface:
-    """Draw one frame off-screen at the default size; save it as an image if ``path`` is given."""
-    pygame.display.init()
-    surface = pygame.Surface(default_window_size(sim))
+    """Draw one frame off-screen at the default size (no display needed); save it as an image
+    if ``path`` is given."""
     bridge = Bridge(sim)
-    window = Window(bridge, surface=surface)
-    window.draw()
-    window.close()
+    canvas = OffscreenRenderer(bridge.scene)
+    canvas.draw(bridge.latest)
     bridge.close()
     if path is not None:
-        pygame.image.save(surface, str(path))
-    return surface
+        pygame.image.save(canvas.surface, str(path))
+    return canvas.surface
 
 
 def run_window(
