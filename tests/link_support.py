@@ -47,7 +47,7 @@ def serving(
             runner.bus.close()
 
 
-def two_port_send(link: Link, message: bytes, width: int = 4) -> list[float]:
+def two_port_raw(link: Link, message: bytes) -> bytes:
     """The original clients' way: send on port_rx and close, then read port_tx to the end."""
     with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
         out.sendall(message)
@@ -55,8 +55,13 @@ def two_port_send(link: Link, message: bytes, width: int = 4) -> list[float]:
     with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
         while chunk := back.recv(1024):
             data += chunk
+    return data
+
+
+def two_port_send(link: Link, message: bytes, width: int = 4) -> list[float]:
+    """:func:`two_port_raw`, the reply unpacked as floats of ``width`` bytes."""
     code = "<f" if width == 4 else "<d"
-    return [value for (value,) in struct.iter_unpack(code, data)]
+    return [value for (value,) in struct.iter_unpack(code, two_port_raw(link, message))]
 
 
 def read_frame(sock: socket.socket) -> list[float]:

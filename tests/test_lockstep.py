@@ -14,7 +14,7 @@ import pytest
 
 from simmer import Simulation
 from simmer.client import Client
-from simmer.serve import serve
+from simmer.serve import Served, serve
 from simmer.transport.local import LocalLink
 from simmer.world.events import CommandEvent, Event, StepEvent
 
@@ -51,10 +51,8 @@ class Fingerprint:
         return self.digest.hexdigest()
 
 
-def served_run(transport: str, speed: float | None = None) -> tuple[str, Any]:
-    """Run the program through ``transport`` under ``simmer run``'s lockstep clock."""
-    sim = noisy_sim()
-    fingerprint = Fingerprint(sim)
+def lockstep_run(sim: Simulation, program: str, speed: float | None, serial: bool) -> Served:
+    """``simmer run --headless --program PROGRAM`` on free ports; the program must succeed."""
     served = serve(
         sim,
         window=False,
@@ -62,27 +60,34 @@ def served_run(transport: str, speed: float | None = None) -> tuple[str, Any]:
         port_rx=0,
         port_tx=0,
         stream_port=0,
-        serial=transport == "serial",
+        serial=serial,
         echo=lambda _line: None,
-        program=f"{sys.executable} {PROGRAM} {transport}",
+        program=program,
         lockstep=True,
         timeout=120,
     )
     assert served.ended_by == "program"
     assert served.exit_status == 0
-    return fingerprint.hexdigest(), served.outcome.report()
+    return served
 
 
-def local_run() -> tuple[str, Any]:
+def served_run(transport: str, speed: float | None = None) -> str:
+    """Run the program through ``transport`` under ``simmer run``'s lockstep clock."""
+    sim = noisy_sim()
+    fingerprint = Fingerprint(sim)
+    program = f"{sys.executable} {PROGRAM} {transport}"
+    lockstep_run(sim, program, speed, serial=transport == "serial")
+    return fingerprint.hexdigest()
+
+
+def local_run() -> str:
     """The same program in this process, through the Python API."""
     sim = noisy_sim()
     fingerprint = Fingerprint(sim)
     link = LocalLink(sim)
     robot = Client(link, lockstep=True)
     drive_around(robot, robot.sleep, lambda: link.clock("!time"))
-    from simmer.world.outcome import Outcome
-
-    return fingerprint.hexdigest(), Outcome(sim)
+    return fingerprint.hexdigest()
 
 
 @pytest.fixture
@@ -96,16 +101,16 @@ def busy_cpu() -> Any:
 
 def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> None:
     runs = {
-        transport: [served_run(transport)[0] for _ in range(3)]
+        transport: [served_run(transport) for _ in range(3)]
         for transport in ("stream", "two-port", "serial")
     }
-    runs["python"] = [local_run()[0] for _ in range(3)]
+    runs["python"] = [local_run() for _ in range(3)]
     hashes = {digest for digests in runs.values() for digest in digests}
     assert len(hashes) == 1, runs
 
 
 def test_speed_does_not_change_the_run() -> None:
-    assert served_run("stream", speed=None)[0] == served_run("stream", speed=50.0)[0]
+    assert served_run("stream", speed=None) == served_run("stream", speed=50.0)
 
 
 def test_sleep_advances_exactly_and_clock_reads_are_free() -> None:
@@ -134,20 +139,8 @@ def test_idle_waits_for_the_drives() -> None:
 def test_dead_reckoning_under_the_lockstep_clock_is_the_same_at_every_speed() -> None:
     reports = []
     for speed in (None, 20.0, None):
-        sim = Simulation.from_config()
-        served = serve(
-            sim,
-            window=False,
-            speed=speed,
-            port_rx=0,
-            port_tx=0,
-            stream_port=0,
-            echo=lambda _line: None,
-            program=f"{sys.executable} {EXAMPLES / 'dead_reckoning.py'}",
-            lockstep=True,
-            timeout=120,
-        )
-        assert served.exit_status == 0
+        program = f"{sys.executable} {EXAMPLES / 'dead_reckoning.py'}"
+        served = lockstep_run(Simulation.from_config(), program, speed, serial=False)
         reports.append(served.outcome.report())
     first = reports[0]
     assert first.reached

@@ -17,13 +17,12 @@ from pathlib import Path
 import pytest
 import serial
 
-from link_support import serving, two_port_send
+from link_support import serving, two_port_raw, two_port_send
 from simmer import Simulation
 from simmer.client import connect
 from simmer.config import load_config
 from simmer.console import run_console
 from simmer.protocol import FramedCodec, framed_value, parse_command, unwrap_frames
-from simmer.transport import Link
 
 from helpers import SIMMER_PY, default_data, make_config
 
@@ -34,17 +33,6 @@ def framed_sim(**settings: object) -> Simulation:
     """The default maze and rover, speaking SimMeR v1.2's framed text (native settings)."""
     data = default_data() | {"protocol": "framed", "str_encoding": "ascii"} | settings
     return Simulation(make_config(data))
-
-
-def two_port_raw(link: Link, message: bytes) -> bytes:
-    """What a stock client does: send on port_rx and close, then read port_tx to the end."""
-    with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
-        out.sendall(message)
-    data = b""
-    with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
-        while chunk := back.recv(1024):
-            data += chunk
-    return data
 
 
 # ----------------------------------------------------------------------------- pure
