@@ -70,6 +70,18 @@ def test_overrides_set_dotted_keys_and_make_missing_tables() -> None:
         apply_overrides(data, (("frame_rate.x", 1),))
 
 
+def test_a_broken_configuration_file_is_named_with_its_line(tmp_path: Path) -> None:
+    from simmer.errors import ConfigError
+
+    broken = tmp_path / "robot.toml"
+    broken.write_text("frame_rate = 60\nframe_rate = 30\n", encoding="utf-8")
+    with pytest.raises(ConfigError) as caught:
+        build_config(str(broken), ())
+    (issue,) = caught.value.issues
+    assert issue.line == 2
+    assert "set twice" in issue.message
+
+
 @pytest.mark.parametrize("path", [LAB1, SIMMER_PY / "default_config.py"])
 def test_build_config_overrides_toml_and_config_py(path: Path) -> None:
     plain = build_config(str(path), ())

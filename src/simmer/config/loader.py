@@ -11,6 +11,7 @@ from contextlib import contextmanager
 from functools import cache
 from importlib.resources import files
 from pathlib import Path
+from typing import Any
 
 from simmer.config import simmer_py
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
@@ -33,6 +34,7 @@ __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here f
     "default_config",
     "describe_replies",
     "load_config",
+    "read_config_data",
     "summarize",
 ]
 
@@ -45,6 +47,27 @@ def load_config(path: str | Path | None = None) -> SimConfig:
     """
     if path is None:
         return default_config()
+    path = _checked_file(path)
+    with _unreadable_as_config_error(path):
+        if path.suffix == ".py":
+            return simmer_py.load_simmer_py(path)
+        text = path.read_text(encoding="utf-8")
+        return config_from_toml(text, str(path), path.parent)
+
+
+def read_config_data(path: str | Path) -> tuple[dict[str, Any], bool]:
+    """A configuration file's data before validation, with the same checks and messages as
+    :func:`load_config`, and whether it is an original SimMeR ``config.py`` (validate it with
+    ``config_from_dict(..., original=True)`` then). For tools that change settings first."""
+    path = _checked_file(path)
+    with _unreadable_as_config_error(path):
+        if path.suffix == ".py":
+            return simmer_py.read_simmer_py(path).data, True
+        return _toml_data(path.read_text(encoding="utf-8"), str(path)), False
+
+
+def _checked_file(path: str | Path) -> Path:
+    """``path``, if it is a file small enough to be a configuration (else a ConfigError)."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(
@@ -62,11 +85,7 @@ def load_config(path: str | Path | None = None) -> SimConfig:
                 )
             ],
         )
-    with _unreadable_as_config_error(path):
-        if path.suffix == ".py":
-            return simmer_py.load_simmer_py(path)
-        text = path.read_text(encoding="utf-8")
-        return config_from_toml(text, str(path), path.parent)
+    return path
 
 
 @contextmanager
@@ -100,14 +119,18 @@ def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
     A file that is not TOML gets one issue in plain words, with its line (a key or table
     written twice names both lines: :mod:`simmer.config.toml_errors`).
     """
+    return config_from_dict(_toml_data(text, source), source, base_dir)
+
+
+def _toml_data(text: str, source: str) -> dict[str, Any]:
+    """Parse TOML text; a ConfigError in plain words, with the line, if it is not TOML."""
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(source, [toml_issue(exc, text)]) from None
     except RecursionError:
         message = "lists or tables are nested too deeply to read; no setting nests more than 3"
         raise ConfigError(source, [ConfigIssue("", f"not valid TOML: {message}")]) from None
-    return config_from_dict(data, source, base_dir)
 
 
 # ----------------------------------------------------------------------------- summary

@@ -19,7 +19,6 @@ import signal
 import sys
 import tempfile
 import time
-import tomllib
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
@@ -119,12 +118,9 @@ def load_data(path: str) -> tuple[dict[str, Any], bool]:
     """A configuration file's data before validation, and whether it is an original SimMeR
     ``config.py`` (whose data is what :func:`~simmer.config.simmer_py.read_simmer_py` maps
     its globals to). Cached: a worker reads each file once."""
-    if path.endswith(".py"):
-        from simmer.config.simmer_py import read_simmer_py
+    from simmer.config.loader import read_config_data
 
-        return read_simmer_py(path).data, True
-    with open(path, "rb") as file:
-        return tomllib.load(file), False
+    return read_config_data(path)
 
 
 @lru_cache(maxsize=64)
