@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from simmer.client import connect
+from simmer.client import Client, connect
 from simmer.errors import ClientError
 
 SEQUENCE = [
@@ -26,24 +26,33 @@ def show(values: list[float]) -> str:
     return "  ".join(f"u{i} {v:6.2f}" for i, v in enumerate(values))
 
 
+def drive_sequence(robot: Client) -> list[list[float]]:
+    """Drive the sequence with a connected client; returns the readings taken after each move.
+
+    Also a sweep's policy (``policy = "dead_reckoning:drive_sequence"``): the same moves run
+    in-process, without a program or a socket per run.
+    """
+    readings = []
+    print("start      " + show(robot.send(SENSORS)))
+    for drive, amount in SEQUENCE:
+        if not math.isinf(robot.drive(drive, amount)):
+            raise SystemExit(f"{drive} {amount} was not accepted (a drive is still moving?)")
+        robot.wait_idle(drive)
+        values = robot.send(SENSORS)
+        readings.append(values)
+        print(f"{drive} {amount:5g}   " + show(values))
+    return readings
+
+
 def main(argv: list[str] | None = None) -> list[list[float]]:
-    """Run the sequence; returns the readings taken after each move."""
+    """Connect and run the sequence; returns the readings taken after each move."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=61202, help="persistent protocol port")
     args = parser.parse_args(argv)
 
-    readings = []
     with connect(args.host, args.port) as robot:
-        print("start      " + show(robot.send(SENSORS)))
-        for drive, amount in SEQUENCE:
-            if not math.isinf(robot.drive(drive, amount)):
-                raise SystemExit(f"{drive} {amount} was not accepted (a drive is still moving?)")
-            robot.wait_idle(drive)
-            values = robot.send(SENSORS)
-            readings.append(values)
-            print(f"{drive} {amount:5g}   " + show(values))
-    return readings
+        return drive_sequence(robot)
 
 
 if __name__ == "__main__":

@@ -45,15 +45,14 @@ class Pose(NamedTuple):
 def polygon_gap(a: FloatArray, b: FloatArray) -> float:
     """Smallest distance between the outlines of two polygons (0 if their edges cross)."""
     best = math.inf
-    for points, poly in ((a, b), (b, a)):
+    for points, poly in ((a, b), (b, a)):  # every vertex of one against every edge of the other
         starts = poly
-        ends = np.roll(poly, -1, axis=0)
-        edge = ends - starts
+        edge = np.roll(poly, -1, axis=0) - starts
         length2 = np.maximum((edge**2).sum(axis=1), 1e-12)
-        for p in points:
-            t = np.clip(((p - starts) * edge).sum(axis=1) / length2, 0.0, 1.0)
-            nearest = starts + t[:, None] * edge
-            best = min(best, float(np.sqrt(((p - nearest) ** 2).sum(axis=1)).min()))
+        along = points[:, None, :] - starts[None, :, :]
+        t = np.clip((along * edge).sum(axis=2) / length2, 0.0, 1.0)
+        nearest = starts + t[:, :, None] * edge
+        best = min(best, float(np.sqrt(((points[:, None, :] - nearest) ** 2).sum(axis=2)).min()))
     return best
 
 

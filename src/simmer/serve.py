@@ -23,6 +23,7 @@ from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
 
 if TYPE_CHECKING:
+    from simmer.transport.bus import CommandBus
     from simmer.ui.video import VideoRecorder
 
 log = logging.getLogger("simmer.serve")
@@ -173,7 +174,7 @@ def serve(
                     f"and {runner.link_delay:g} s per message"
                 )
             if program is not None:
-                started = _start_program(program, link, stop, ended, timeout, echo)
+                started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
                 from simmer.ui import run_window
@@ -223,6 +224,7 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 def _start_program(
     command: str,
     link: Link,
+    bus: CommandBus,
     stop: threading.Event,
     ended: list[str],
     timeout: float | None,
@@ -249,6 +251,7 @@ def _start_program(
         else:
             ended.append("program")
         stop.set()
+        bus.interrupt()  # the loop may be waiting for a message that will not come
 
     threading.Thread(target=watch, name="simmer-program", daemon=True).start()
     return program

@@ -121,6 +121,13 @@ class CommandBus:
             self._wake()
         return request
 
+    def interrupt(self) -> None:
+        """Wake the loop thread from its wait now (any thread may ask), so it notices at once
+        something decided outside it, such as a stop request."""
+        with self._lock:
+            if not self._closed:
+                self._wake()
+
     def _wake(self) -> None:
         """Interrupt the loop's wait (caller holds ``_lock`` and the bus is open)."""
         with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
