@@ -5,6 +5,7 @@ trace, and a run killed with SIGKILL leaves an events.jsonl whose every line par
 from __future__ import annotations
 
 import csv
+import dataclasses
 import itertools
 import json
 import math
@@ -186,6 +187,8 @@ def test_every_event_type_round_trips_with_nan_and_infinities() -> None:
         assert type(back) is type(event)
         assert event_line(back) == line  # the same values, NaN and -0.0 included
     command = json.loads(event_line(events[0]))
+    # a command's line is spelt out for speed: it must have every field, in the class's order
+    assert list(command) == ["type", *(f.name for f in dataclasses.fields(CommandEvent))]
     assert command["replies"] == [12.345678901234567, "inf", "nan", "-inf"]
     assert json.loads(event_line(events[1]))["pose"] == [1.5, -0.0, 359.99999999999994]
     assert math.copysign(1, event_from_dict(json.loads(event_line(events[1]))).pose.y) < 0
