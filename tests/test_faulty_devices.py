@@ -22,8 +22,9 @@ from simmer.config.probe import probe_devices
 from simmer.devices import Device, DeviceParams, Shape, World, register_device_kind
 from simmer.errors import CommandError, ConfigIssue
 from simmer.ui.bridge import Bridge
-from simmer.ui.hud import ALARM, paint_hud
+from simmer.ui.hud import ALARM, BOX, COMMANDS_X, paint_hud
 from simmer.ui.render import RecordingRenderer
+from simmer.ui.scene import PANEL_HEIGHT, default_window_size
 from simmer.world.events import Event, StepEvent
 
 from helpers import SIMMER_PY, default_data, make_config, make_sim
@@ -152,6 +153,34 @@ def test_switched_off_device_is_shown_in_red_on_the_hud() -> None:
     paint_hud(r, bridge.latest)
     red = [args[0] for args in r.of("text") if args[2] == ALARM]
     assert red == [f"t0 switched off: {REASON}"]
+    bridge.close()
+
+
+def test_the_switched_off_box_stays_in_the_panel_above_the_maze() -> None:
+    data = default_data()
+    data["sensors"]["t0"] = {"type": faulty_kind("test_faulty_box", "simulate")}
+    data["sensors"]["t1"] = {"type": faulty_kind("test_faulty_box_2", "simulate")}
+    sim = Simulation(make_config(data))
+    bridge = Bridge(sim)
+    sim.command("t0")
+    sim.command("t1")
+    bridge.sync()
+    width = default_window_size(sim)[0]
+    for room in (width, 1000):  # a narrower window cuts the lines instead
+        r = RecordingRenderer()
+        paint_hud(r, bridge.latest, room)
+        (box,) = [args[0] for args in r.of("rect") if args[1] == BOX]
+        x, y, w, h = box
+        assert y >= 0
+        assert y + h <= PANEL_HEIGHT  # never over the maze
+        assert x >= COMMANDS_X - 10  # beside the time, pose and outcome
+        assert x + w <= room
+        red = [args[0] for args in r.of("text") if args[2] == ALARM]
+        assert [line[:2] for line in red] == ["t0", "t1"]
+        if room == width:
+            assert red[0] == f"t0 switched off: {REASON}"
+        else:
+            assert str(red[0]).endswith("...")
     bridge.close()
 
 

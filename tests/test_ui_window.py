@@ -26,8 +26,9 @@ from simmer.runner import Runner
 from simmer.transport import Link
 from simmer.ui import Bridge, Window, run_window
 from simmer.ui.bridge import Controls, PlaceRobot
-from simmer.ui.hud import LIT, TEXT, paint_hud
+from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
 from simmer.ui.render import RecordingRenderer
+from simmer.ui.scene import TRAIL_COLOR
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 
@@ -214,6 +215,34 @@ def test_h_toggles_help(window: Window) -> None:
     key(pygame.K_h, unicode="h")
     tick(window)
     assert not window.show_help
+
+
+def test_t_shows_and_hides_the_path_driven_so_far(window: Window) -> None:
+    sim = window.bridge.sim
+    sim.command("w0-12")  # from (6, 42) up to (6, 30)
+    assert sim.run_until_idle()
+    sim.command("r0-45")  # so that no sensor looks back along the path
+    assert sim.run_until_idle()
+    tick(window)
+    screen = window.screen
+
+    def trail_shown() -> list[bool]:
+        """Whether the trail's colour is at each inch the robot drove and left behind."""
+        pixels = [window.view.point(6.0, y) for y in range(35, 43)]
+        return [tuple(screen.get_at((round(x), round(y))))[:3] == TRAIL_COLOR for x, y in pixels]
+
+    assert all(trail_shown())
+    key(pygame.K_t, unicode="t")
+    tick(window)
+    assert not window.canvas.show_trail
+    assert not any(trail_shown())
+    key(pygame.K_t, unicode="t")
+    tick(window)
+    assert all(trail_shown())
+    window.reset()  # a new run: a new trail
+    tick(window)
+    assert not any(trail_shown())
+    assert "T" in dict(HELP)
 
 
 def test_drag_moves_the_robot(window: Window) -> None:

@@ -7,7 +7,7 @@ import logging
 import os
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
@@ -15,6 +15,9 @@ from rich.console import Console
 from simmer.config import SimConfig, load_config, summarize
 from simmer.errors import ConfigError
 from simmer.ports import STREAM_PORT
+
+if TYPE_CHECKING:
+    from simmer.ui.replay_model import Recording
 
 app = typer.Typer(
     name="simmer",
@@ -449,6 +452,101 @@ def plot(
         raise typer.Exit(1) from None
     for path in written:
         out.print(f"wrote {path}", markup=False)
+
+
+def _load_recording(folder: Path) -> Recording:
+    """Re-simulate a run folder, saying whether it matches its recording; exit status 1 with
+    one line if it cannot be replayed."""
+    from simmer.errors import ReplayError
+    from simmer.ui.replay_model import Recording
+
+    out.print(f"re-simulating the run in {folder} ...", markup=False)
+    try:
+        recording = Recording.load(folder)
+    except ReplayError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    check = recording.check
+    for i, line in enumerate(check.lines()):
+        if check.matches and check.incomplete is None:
+            out.print(line, markup=False)
+        else:
+            err.print(line, style="bold red" if i == 0 else "yellow", markup=False)
+    return recording
+
+
+@app.command()
+def replay(
+    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    check: Annotated[
+        bool,
+        typer.Option(
+            "--check",
+            help="Only re-simulate and compare with the recording, without a window: exit "
+            "status 1 if they differ.",
+        ),
+    ] = False,
+) -> None:
+    """Replay a recorded run in a window: play, pause, speed, a timeline to drag, the commands
+    beside the maze (H lists the keys). It is simulated again from the recorded configuration,
+    seed and inputs, and says whether that matches the recording (and where it first differs
+    if not)."""
+    recording = _load_recording(folder)
+    if check:
+        raise typer.Exit(0 if recording.check.matches else 1)
+    from simmer.errors import SimmerError
+    from simmer.ui.replay import run_replay
+
+    try:
+        run_replay(recording, echo=lambda line: out.print(line, markup=False))
+    except SimmerError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+
+
+@app.command()
+def render(
+    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "-o",
+            "--output",
+            help="The clip: .mp4 (H.264) or .gif (default: replay.mp4 in the run folder).",
+            show_default=False,
+        ),
+    ] = None,
+    start: Annotated[
+        float | None,
+        typer.Option(
+            "--from",
+            help="Start, in seconds from the start of the run (default: its start).",
+            show_default=False,
+        ),
+    ] = None,
+    end: Annotated[
+        float | None,
+        typer.Option(
+            "--to",
+            help="End, in seconds from the start of the run (default: its end).",
+            show_default=False,
+        ),
+    ] = None,
+) -> None:
+    """Cut a clip of a recorded run into a video: what the window shows (with the path driven
+    so far), at 30 frames per simulated second, drawn without a display."""
+    from simmer.errors import ReplayError
+    from simmer.ui.clip import write_clip
+
+    recording = _load_recording(folder)
+    path = output if output is not None else folder / "replay.mp4"
+    try:
+        frames = write_clip(recording, path, start, end)
+    except ReplayError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    seconds = frames / recording.timeline.fps
+    out.print(f"wrote {path} ({frames} frames, {seconds:.2f} s)", markup=False)
 
 
 class Engine(StrEnum):

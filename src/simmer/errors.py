@@ -64,6 +64,11 @@ class ReplyTimeout(ClientError):
     """No complete reply arrived in time."""
 
 
+class ReplayError(SimmerError):
+    """A run folder cannot be replayed or rendered (not a run folder, unreadable files, a
+    configuration that no longer loads, a time outside the run)."""
+
+
 # ----------------------------------------------------------------------------- user code
 
 SIMMER_DIR = Path(__file__).resolve().parent

@@ -161,7 +161,7 @@ def config_from_manifest(data: dict[str, Any]) -> SimConfig:
     return replace(config, origin=data.get("origin", ""))
 
 
-def _versions() -> dict[str, str]:
+def library_versions() -> dict[str, str]:
     """Versions of the libraries a run's numbers could depend on."""
     found = {}
     for name in ("numpy", "numba"):
@@ -191,7 +191,7 @@ def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, A
             "implementation": platform.python_implementation(),
             "os": platform.platform(),
             "machine": platform.machine(),
-            **_versions(),
+            **library_versions(),
         },
         "trace": {"rate": TRACE_RATE, "columns": trace_columns(sensors)},
         "config": config_to_manifest(sim.config),

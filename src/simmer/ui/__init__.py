@@ -8,7 +8,10 @@ command's reply. Drawing goes through the small :class:`~simmer.ui.render.Render
 tests can record the draw calls without a window. The
 :class:`~simmer.ui.offscreen.OffscreenRenderer` draws a snapshot on any surface, without a
 display: the window uses it, and so does :class:`~simmer.ui.video.VideoRecorder`, which records
-what the window shows into an MP4 or GIF at a fixed rate in simulated time.
+what the window shows into an MP4 or GIF at a fixed rate in simulated time. A recorded run is
+played back in :mod:`simmer.ui.replay` (re-simulated by :mod:`simmer.ui.replay_model`) and cut
+into clips by :mod:`simmer.ui.clip`. The window, videos, replays and clips show the path driven
+so far (:mod:`simmer.ui.trail`).
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from simmer.ui.render import Color, Renderer
-from simmer.ui.scene import PANEL_HEIGHT, tint
+from simmer.ui.scene import PANEL_HEIGHT, TRAIL_COLOR, tint
 from simmer.ui.snapshot import HasScene, Snapshot
 from simmer.world.events import CommandEvent, Event
 from simmer.world.outcome import OutcomeReport
@@ -32,6 +32,8 @@ HUD_COLORS = (TEXT, DIM, LIT, UNLIT, ALARM, BOX, (0, 0, 0), (255, 255, 255))
 """Every flat colour the HUD paints with (the heartbeat fades between the last and UNLIT)."""
 SWITCHED_OFF_SHOWN = 3
 """At most this many switched-off devices are named on screen (all of them are in the log)."""
+LETTER = 0.38
+"""Width of a letter of pygame's default font, in em, a little over the average."""
 
 HELP = (
     ("W / S", "drive forward / backward (6 in/s)"),
@@ -41,6 +43,7 @@ HELP = (
     (".", "one step while paused"),
     ("+ / -", "faster / slower (simulation speed)"),
     ("R", "reset robot, block, sensors and the outcome"),
+    ("T", "show / hide the path driven so far (videos show it)"),
     ("left-drag", "move the robot (refused onto a wall)"),
     ("right-drag", "turn the robot"),
     ("V", "start / stop a video (simmer-*.mp4 here)"),
@@ -94,7 +97,8 @@ def _same(a: Sequence[float], b: Sequence[float]) -> bool:
     )
 
 
-def _reply(value: float) -> str:
+def reply_text(value: float) -> str:
+    """A reply as the HUD shows it: ``ok`` for +inf (accepted), ``NaN``, or 4 digits."""
     if math.isnan(value):
         return "NaN"
     if math.isinf(value):
@@ -141,6 +145,7 @@ def legend(scene: HasScene) -> list[tuple[Color, str]]:
         if color is not None:
             items.append((color, "ultrasonic rays"))
             break
+    items.append((TRAIL_COLOR, "path so far (T)"))
     return items
 
 
@@ -157,20 +162,21 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
     if x < CLIENTS_X + 220:  # no room beside the clients column: leave it out
         return
     for i, (color, label) in enumerate(legend(scene)):
-        y = 12 + 22 * i
+        y = 10 + 20 * i
         r.draw_rect((x, y + 2, 14, 14), color)
         r.draw_text(label, (x + 22, y), TEXT, 20)
 
 
-def paint_hud(r: Renderer, snap: Snapshot) -> None:
-    """The HUD's changing values; everything in simulated time."""
+def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
+    """The HUD's changing values; everything in simulated time. ``width``: the surface's, if
+    long lines must be cut to fit it."""
     # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
     r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), snap.time % 1.0, UNLIT))
     for key in sorted(snap.held):
         _key_cap(r, key, lit=True)
 
     paused = snap.paused
-    state = "PAUSED (Space resumes, . steps)" if paused else "running"
+    state = "PAUSED (Space resumes)" if paused else "running"  # ends before the commands
     r.draw_text(
         f"{snap.time:.2f} s   speed {speed_text(snap.speed)}   {state}",
         (VALUE_X, ROWS[0]),
@@ -191,7 +197,7 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
     if not commands:
         r.draw_text("none yet", (COMMANDS_X, 32), DIM, 18)
     for i, event in enumerate(reversed(commands)):
-        replies = ", ".join(_reply(v) for v in event.replies)
+        replies = ", ".join(reply_text(v) for v in event.replies)
         line = f"{event.time:7.2f} s  {event.message[:28]} -> {replies[:40]}"
         if isinstance(event, RepeatedCommand):
             line += f"  x{event.count}"
@@ -205,7 +211,7 @@ def paint_hud(r: Renderer, snap: Snapshot) -> None:
         if not clients:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
     if snap.switched_off:
-        paint_switched_off(r, snap.switched_off)
+        paint_switched_off(r, snap.switched_off, width)
     if snap.recording is not None:  # the file's name is in the log
         r.draw_circle((18, 102), 5, ALARM)
         r.draw_text("REC", (28, 95), ALARM, 18)
@@ -236,32 +242,44 @@ def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
     )
 
 
-def paint_switched_off(r: Renderer, switched_off: tuple[tuple[str, str], ...]) -> None:
-    """One red line per device switched off, in a dark box over the top of the maze: a student
-    must notice that their device no longer answers, and why."""
+def paint_switched_off(
+    r: Renderer, switched_off: tuple[tuple[str, str], ...], width: int | None = None
+) -> None:
+    """One red line per device switched off, in a red-edged box at the bottom right of the
+    panel, over the older commands (never over the maze): a student must notice that their
+    device no longer answers, and why. Lines are cut to fit ``width`` if given."""
     lines = [f"{device_id} switched off: {reason}"[:120] for device_id, reason in switched_off]
     if len(lines) > SWITCHED_OFF_SHOWN:
         more = len(lines) - SWITCHED_OFF_SHOWN + 1
         lines[SWITCHED_OFF_SHOWN - 1 :] = [f"... and {more} more devices switched off"]
     hint = "switched-off devices answer NaN; the traceback is in the log; R (reset) restarts them"
-    size, step = 20, 20
-    width = 24 + size * 2 * max(len(line) for line in [*lines, hint]) // 5  # ~0.4 em a letter
-    x, y = 8, PANEL_HEIGHT + 4
-    r.draw_rect((x, y, width, 10 + step * (len(lines) + 1)), BOX)
+    size, step, hint_size = 18, 18, 16
+    x = COMMANDS_X - 10
+    if width is not None:
+        fits = max(8, int((width - x - 20) / (LETTER * size)))
+        lines = [line if len(line) <= fits else line[: fits - 3] + "..." for line in lines]
+        hint = hint if len(hint) <= fits else hint[: fits - 3] + "..."
+    box_width = 20 + round(LETTER * size * max(len(line) for line in [*lines, hint]))
+    if width is not None:
+        box_width = min(box_width, width - x)
+    height = 8 + step * len(lines) + hint_size + 4
+    y = PANEL_HEIGHT - height - 2
+    r.draw_rect((x, y, box_width, height), BOX)
+    r.draw_rect((x, y, box_width, height), ALARM, 1)
     for i, line in enumerate(lines):
         r.draw_text(line, (x + 10, y + 6 + step * i), ALARM, size)
-    r.draw_text(hint, (x + 10, y + 6 + step * len(lines)), DIM, 18)
+    r.draw_text(hint, (x + 10, y + 6 + step * len(lines)), DIM, hint_size)
 
 
-def paint_help(r: Renderer, size: tuple[int, int]) -> None:
-    """The key list, in a box over the maze."""
-    width, height = 560, 44 + 26 * len(HELP)
+def paint_help(r: Renderer, size: tuple[int, int], keys: Sequence[tuple[str, str]] = HELP) -> None:
+    """The list of ``keys`` (key, what it does), in a box over the maze."""
+    width, height = 560, 44 + 26 * len(keys)
     x0 = max(0, (size[0] - width) // 2)
     y0 = max(PANEL_HEIGHT, (size[1] - height) // 2)
     r.draw_rect((x0, y0, width, height), BOX)
     r.draw_rect((x0, y0, width, height), LIT, 2)
     r.draw_text("Keys and mouse", (x0 + 16, y0 + 12), LIT, 24)
-    for i, (key, what) in enumerate(HELP):
+    for i, (key, what) in enumerate(keys):
         y = y0 + 42 + 26 * i
         r.draw_text(key, (x0 + 16, y), LIT, 22)
         r.draw_text(what, (x0 + 140, y), TEXT, 22)

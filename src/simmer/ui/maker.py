@@ -15,6 +15,7 @@ from typing import Protocol
 from simmer.geometry import FloatArray
 from simmer.ui.hud import CommandLog
 from simmer.ui.snapshot import RobotLayout, Snapshot
+from simmer.ui.trail import Trail
 from simmer.world import Simulation
 from simmer.world.events import Observer
 from simmer.world.outcome import Outcome
@@ -53,9 +54,9 @@ class LocalControls:
 
 class SnapshotMaker:
     """Builds :class:`Snapshot` values of one simulation, with what the HUD shows besides it:
-    the run's outcome and the last commands (observers it adds to ``sim``). The window's
-    :class:`~simmer.ui.bridge.Bridge` and the video (:class:`~simmer.ui.video.VideoRecorder`)
-    each have one.
+    the run's outcome, the last commands and the trail (observers it adds to ``sim``). The
+    window's :class:`~simmer.ui.bridge.Bridge` and the video
+    (:class:`~simmer.ui.video.VideoRecorder`) each have one.
 
     Use it only in the thread that owns ``sim``.
     """
@@ -71,6 +72,13 @@ class SnapshotMaker:
         self.outcome = outcome
         """The run's outcome the HUD shows: the one already following ``sim`` (a served run
         reports the same figures at its end), else this maker's own."""
+        trail = next((o for o in sim.observers if isinstance(o, Trail)), None)
+        if trail is None:
+            trail = Trail(sim.robot.pose)
+            self._attached.append(trail)
+        self.trail = trail
+        """The path driven so far: shared like :attr:`outcome` (a video started from the window
+        shows the window's trail)."""
         self.commands = CommandLog()
         self._attached.append(self.commands)
         for observer in self._attached:
@@ -96,6 +104,7 @@ class SnapshotMaker:
             clients=ctl.clients,
             ghost=ghost,
             recording=recording,
+            trail=self.trail.view(),
         )
 
     def close(self) -> None:

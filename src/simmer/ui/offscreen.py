@@ -5,16 +5,23 @@ screenshots and :func:`render_scene` draw on plain surfaces through the same cod
 a video is exactly what the window showed. It keeps the static layer (floor, walls, rulers, HUD
 labels) cached per surface size and restores only what the previous frame drew over it.
 Creating one needs no pygame display (only fonts), so it works on a machine without a screen.
+
+The trail (:mod:`simmer.ui.trail`) is painted into the static layer as it grows, each new
+piece once, under the robot; the layer is put back to its clean copy only when the trail
+starts again (a reset, thinning, a replay seeking backwards) or is hidden.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import pygame
 
-from simmer.ui.hud import paint_help, paint_hud, paint_hud_static
+from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.ui.snapshot import HasScene, Snapshot
+from simmer.ui.trail import TrailView
 
 __all__ = ["OffscreenRenderer", "even_size", "static_layer"]
 
@@ -41,13 +48,18 @@ def static_layer(size: tuple[int, int], like: pygame.Surface) -> pygame.Surface:
 
 class OffscreenRenderer:
     """Draws snapshots of ``scene`` on ``surface`` (default: a new surface of the window's
-    default size), each frame only where the previous one drew over the static layer."""
+    default size), each frame only where the previous one drew over the static layer.
+
+    ``show_trail``: draw the snapshots' trails (videos do; the window's T key switches it).
+    """
 
     def __init__(
         self,
         scene: HasScene,
         surface: pygame.Surface | None = None,
         text: TextCache | None = None,
+        *,
+        show_trail: bool = True,
     ) -> None:
         self.scene = scene
         if surface is None:
@@ -56,8 +68,13 @@ class OffscreenRenderer:
         self.renderer = PygameRenderer(self.surface, text)
         self.painter = ScenePainter(scene)
         self.view = View(1.0, 0.0, 0.0)
+        self.show_trail = show_trail
         self.static = pygame.Surface((1, 1))
+        self._clean = self.static
+        """The static layer without the trail."""
         self._drawn: list[pygame.Rect] = []  # what the last frame drew over the static layer
+        self._trail: tuple[int, int] | None = None
+        """(generation, points) of the trail painted into the static layer; None: none is."""
         self.layout()
 
     def use(self, surface: pygame.Surface) -> None:
@@ -73,23 +90,34 @@ class OffscreenRenderer:
         static = PygameRenderer(self.static, self.renderer.text)
         self.painter.paint_static(static, self.view, size)
         paint_hud_static(static, self.scene, size[0])
+        self._clean = self.static.copy()
+        self._trail = None
         self.invalidate()
 
     def invalidate(self) -> None:
         """Repaint the whole surface at the next :meth:`draw` (something else drew on it)."""
         self._drawn = [self.static.get_rect()]
 
-    def draw(self, snap: Snapshot, *, show_help: bool = False) -> list[pygame.Rect] | None:
-        """Draw ``snap`` (with the key help over it if ``show_help``); return the rectangles
-        that changed since the previous frame, or None if the whole surface was repainted.
+    def draw(
+        self,
+        snap: Snapshot,
+        *,
+        show_help: bool = False,
+        keys: Sequence[tuple[str, str]] = HELP,
+    ) -> list[pygame.Rect] | None:
+        """Draw ``snap`` (with the help for ``keys`` over it if ``show_help``); return the
+        rectangles that changed since the previous frame, or None if the whole surface was
+        repainted.
 
-        Only what the previous frame drew is restored from the cached static layer, so a frame
-        costs the size of the robot, rays and HUD values, not of the surface.
+        Only what the previous frame drew (and the trail's new piece) is restored from the
+        cached static layer, so a frame costs the size of the robot, rays and HUD values, not
+        of the surface.
         """
         surface = self.surface
         static = self.static
-        previous = self._drawn
-        everything = previous == [static.get_rect()]
+        trail = self._paint_trail(snap.trail if self.show_trail else None)
+        previous = self._drawn + trail
+        everything = self._drawn == [static.get_rect()]
         if everything:
             surface.blit(static, (0, 0))
         else:
@@ -98,8 +126,35 @@ class OffscreenRenderer:
         r = self.renderer
         r.dirty.clear()
         self.painter.paint_dynamic(r, self.view, snap)
-        paint_hud(r, snap)
+        paint_hud(r, snap, surface.get_width())
         if show_help:
-            paint_help(r, surface.get_size())
+            paint_help(r, surface.get_size(), keys)
         self._drawn = merge_rects(r.dirty)
         return None if everything else previous + self._drawn
+
+    def _paint_trail(self, trail: TrailView | None) -> list[pygame.Rect]:
+        """Bring the static layer's trail up to ``trail`` (None: no trail); return where it
+        was painted on, or invalidate the surface if the layer was put back to clean."""
+        painted = self._trail
+        if trail is None or len(trail.points) == 0:
+            if painted is not None:
+                self._restart_trail(None)
+            return []
+        generation, count = trail.generation, len(trail.points)
+        if painted is None or painted[0] != generation or painted[1] > count:
+            self._restart_trail(generation)
+            start = 0
+        else:
+            start = max(0, painted[1] - 1)  # the new piece joins the last point painted
+        self._trail = (generation, count)
+        if count - start < 2:
+            return []
+        static = PygameRenderer(self.static, self.renderer.text)
+        self.painter.paint_trail(static, self.view, trail.points[start:])
+        return merge_rects(static.dirty)
+
+    def _restart_trail(self, generation: int | None) -> None:
+        """Put the static layer back to clean (no trail) and repaint the whole surface."""
+        self.static.blit(self._clean, (0, 0))
+        self._trail = None if generation is None else (generation, 0)
+        self.invalidate()

@@ -37,6 +37,10 @@ class Renderer(Protocol):
         """A closed polygon; ``width`` 0 fills it."""
         ...
 
+    def draw_lines(self, points: Sequence[Point], color: Color, width: int = 1) -> None:
+        """An open polyline through at least two points."""
+        ...
+
     def draw_circle(self, center: Point, radius: float, color: Color, width: int = 0) -> None:
         """A circle; ``width`` 0 fills it."""
         ...
@@ -81,6 +85,10 @@ class RecordingRenderer:
     def draw_polygon(self, points: Sequence[Point], color: Color, width: int = 0) -> None:
         """Record a polygon."""
         self.calls.append(DrawCall("polygon", (tuple(points), color, width)))
+
+    def draw_lines(self, points: Sequence[Point], color: Color, width: int = 1) -> None:
+        """Record a polyline."""
+        self.calls.append(DrawCall("lines", (tuple(points), color, width)))
 
     def draw_circle(self, center: Point, radius: float, color: Color, width: int = 0) -> None:
         """Record a circle."""
@@ -146,6 +154,10 @@ class PygameRenderer:
     def draw_polygon(self, points: Sequence[Point], color: Color, width: int = 0) -> None:
         """A closed polygon; ``width`` 0 fills it."""
         self.dirty.append(pygame.draw.polygon(self.surface, color, points, width))
+
+    def draw_lines(self, points: Sequence[Point], color: Color, width: int = 1) -> None:
+        """An open polyline."""
+        self.dirty.append(pygame.draw.lines(self.surface, color, False, points, width))
 
     def draw_circle(self, center: Point, radius: float, color: Color, width: int = 0) -> None:
         """A circle; ``width`` 0 fills it."""

@@ -24,6 +24,8 @@ WHITE_TILE: Color = (235, 235, 235)
 BLACK_TILE: Color = (30, 30, 30)
 GHOST_COLOR: Color = (255, 90, 90)
 RULER_COLOR: Color = (220, 235, 235)
+TRAIL_COLOR: Color = (255, 140, 0)
+"""The path driven so far: orange, as on path.png, visible on white and black tiles."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,7 @@ class ScenePainter:
             settings.robot_color,
             self.robot_fill,
             GHOST_COLOR,
+            TRAIL_COLOR,
         ]
 
     # ----------------------------------------------------------------- static layer
@@ -162,6 +165,16 @@ class ScenePainter:
         for row in range(1, maze.rows + 1):
             x, y = view.point(0, row * maze.cell)
             r.draw_text(f"{row * maze.cell:g}", (x - border, y - size), RULER_COLOR, size)
+
+    def paint_trail(self, r: Renderer, view: View, points: FloatArray) -> None:
+        """The trail's ``points`` (world inches; a NaN row splits it) as lines, each piece of
+        two points or more (3 px wide at the default 16 ppi, 2 px at least)."""
+        width = max(2, round(view.ppi / 6))
+        gaps = np.flatnonzero(np.isnan(points[:, 0]))
+        for piece in np.split(points, gaps):
+            pixels = view.points(piece[~np.isnan(piece[:, 0])])
+            if len(pixels) >= 2:
+                r.draw_lines(pixels, TRAIL_COLOR, width)
 
     # ----------------------------------------------------------------- dynamic layer
 

@@ -20,6 +20,7 @@ import numpy as np
 from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
+from simmer.ui.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
 from simmer.world.maze import Maze
@@ -137,6 +138,8 @@ class Snapshot:
     """(device id, reason) of each device switched off because its code raised."""
     recording: str | None = None
     """The name of the video the window is recording, if it is."""
+    trail: TrailView | None = None
+    """The path driven so far, if something keeps it."""
 
     @property
     def outline(self) -> FloatArray:
@@ -156,6 +159,7 @@ class Snapshot:
         clients: Sequence[str] | None = None,
         ghost: FloatArray | None = None,
         recording: str | None = None,
+        trail: TrailView | None = None,
     ) -> Snapshot:
         """Read a simulation now (only in the thread that owns it)."""
         robot = sim.robot
@@ -179,4 +183,5 @@ class Snapshot:
             ghost=ghost,
             switched_off=tuple(sim.switched_off.items()),
             recording=recording,
+            trail=trail,
         )

@@ -60,8 +60,10 @@ __all__ = [
     "LocalControls",
     "Window",
     "faster",
+    "new_file",
     "render_scene",
     "run_window",
+    "save_screenshot",
     "slower",
 ]
 
@@ -216,29 +218,18 @@ class Window:
             self.reset()
         elif key == pygame.K_h:
             self.show_help = not self.show_help
+        elif key == pygame.K_t:
+            self.canvas.show_trail = not self.canvas.show_trail
         elif key == pygame.K_v:
-            post(ToggleVideo(self._new_file(".mp4")))  # the path is used if none is recording
+            # the path is used only if no video is being recorded
+            post(ToggleVideo(new_file(self.save_dir, ".mp4")))
         elif key == pygame.K_p:
             self.screenshot()
         return True
 
     def screenshot(self) -> Path:
         """Save what the window shows as a PNG in :attr:`save_dir`; its path."""
-        path = self._new_file(".png")
-        pygame.image.save(self.screen, str(path))
-        log.info("saved a screenshot: %s", path)
-        return path
-
-    def _new_file(self, suffix: str) -> Path:
-        """``simmer-<date>-<time><suffix>`` in :attr:`save_dir`, numbered if taken."""
-        folder = self.save_dir if self.save_dir is not None else Path.cwd()
-        stem = time.strftime("simmer-%Y%m%d-%H%M%S")
-        path = folder / f"{stem}{suffix}"
-        number = 1
-        while path.exists():
-            number += 1
-            path = folder / f"{stem}-{number}{suffix}"
-        return path
+        return save_screenshot(self.screen, new_file(self.save_dir, ".png"))
 
     def reset(self) -> None:
         """Ask for robot, block, devices, time and outcome back at the start; keys released."""
@@ -321,6 +312,26 @@ class Window:
         """Close the window (the bridge is closed by whoever made it)."""
         if self._own_display:
             pygame.display.quit()
+
+
+def new_file(folder: Path | None, suffix: str) -> Path:
+    """``simmer-<date>-<time><suffix>`` in ``folder`` (None: the current folder), numbered if
+    taken."""
+    folder = folder if folder is not None else Path.cwd()
+    stem = time.strftime("simmer-%Y%m%d-%H%M%S")
+    path = folder / f"{stem}{suffix}"
+    number = 1
+    while path.exists():
+        number += 1
+        path = folder / f"{stem}-{number}{suffix}"
+    return path
+
+
+def save_screenshot(surface: pygame.Surface, path: Path) -> Path:
+    """Save ``surface`` as an image at ``path`` (and say so in the log); ``path``."""
+    pygame.image.save(surface, str(path))
+    log.info("saved a screenshot: %s", path)
+    return path
 
 
 def render_scene(sim: Simulation, path: str | Path | None = None) -> pygame.Surface:

@@ -2,8 +2,9 @@
 
 A run depends only on its configuration, its seed and its inputs (commands, manual keys,
 placing the robot, resets: :data:`~simmer.world.events.INPUTS`), each applied at the step it
-happened. :func:`replay` applies them again to a new simulation and says where a reply differs
-(a different SimMeR version, a changed device, a configuration that is not the same).
+happened. :func:`replay` applies them again to a new simulation (:func:`feed`: to one made
+with observers of its own) and says where a reply differs (a different SimMeR version, a
+changed device, a configuration that is not the same).
 """
 
 from __future__ import annotations
@@ -45,14 +46,21 @@ def replay(
     observers: Iterable[Observer] = (),
     until_step: int | None = None,
 ) -> Replayed:
-    """Feed the inputs among ``events`` to a fresh simulation at their steps.
+    """Feed the inputs among ``events`` to a fresh simulation at their steps (:func:`feed`).
 
-    ``observers`` see the replayed run's events (a trace writer, a video). The simulation
-    steps on to ``until_step`` (default: the last event's step) after the last input.
+    ``observers`` see the replayed run's events (a trace writer, a video).
     """
     sim = Simulation(config, seed=seed)
     for observer in observers:
         sim.add_observer(observer)
+    return feed(sim, events, until_step)
+
+
+def feed(sim: Simulation, events: Iterable[Event], until_step: int | None = None) -> Replayed:
+    """Feed the inputs among ``events`` to ``sim`` (new, not stepped yet, with its observers)
+    at their steps. The simulation steps on to ``until_step`` (default: the last event's step)
+    after the last input.
+    """
     result = Replayed(sim)
     last = 0
     for event in events:

@@ -1,0 +1,120 @@
+"""Where a re-simulated run first differs from its recording: two ``trace.csv`` files compared.
+
+Rows are matched by the step they were written at (and how many resets came before it), and
+compared cell by cell as text: the same run writes the same digits, so any change of a pose or
+a reading shows (:mod:`simmer.record.trace` writes 10 significant digits). A recording cut
+short (``kill -9``) is compared as far as it goes; its last line, if it was cut in the middle,
+is left out.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+STEP, TIME = "step", "time"
+NO_ROW = "no row"
+
+RowKey = tuple[int, int]
+"""(resets before the row, step): where a row was written."""
+
+
+@dataclass(frozen=True)
+class TraceDifference:
+    """The first cell where two traces differ (``column`` "row": one has a row the other has
+    not; "columns": their headers differ)."""
+
+    time: float
+    """Simulated seconds in the trace (counted again from 0 after a reset)."""
+    part: int
+    """Resets before it."""
+    column: str
+    recorded: str
+    replayed: str
+
+    def describe(self) -> str:
+        """In words: ``at 3.467 s in column x: recorded 12.5, re-simulated 12.6``."""
+        after = f" (after reset {self.part})" if self.part else ""
+        recorded = self.recorded or "blank"
+        replayed = self.replayed or "blank"
+        if self.column == "columns":
+            return f"the trace columns differ: recorded {recorded}, re-simulated {replayed}"
+        where = "" if self.column == "row" else f" in column {self.column}"
+        return f"at {self.time:.3f} s{after}{where}: recorded {recorded}, re-simulated {replayed}"
+
+
+@dataclass(frozen=True)
+class TraceRows:
+    """A trace's header and its whole rows, each with where it was written."""
+
+    header: list[str]
+    rows: list[tuple[RowKey, list[str]]]
+
+    @property
+    def end(self) -> RowKey | None:
+        """Where the last row was written (None: no rows)."""
+        return self.rows[-1][0] if self.rows else None
+
+
+def read_trace_rows(path: str | Path) -> TraceRows:
+    """The rows of a ``trace.csv`` (OSError if it cannot be read; ValueError if it has no
+    ``step`` column). A last line without its newline, or with too few cells, is left out."""
+    text = Path(path).read_text(encoding="utf-8")
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+    reader = csv.reader(io.StringIO(text))
+    header = next(reader, [])
+    if STEP not in header:
+        raise ValueError(f"{path} has no {STEP} column")
+    step_at = header.index(STEP)
+    rows: list[tuple[RowKey, list[str]]] = []
+    part, previous = 0, -1
+    for row in reader:
+        if len(row) != len(header):
+            continue
+        try:
+            step = int(row[step_at])
+        except ValueError:
+            continue
+        if step < previous:  # a reset: the steps count from 0 again
+            part += 1
+        previous = step
+        rows.append(((part, step), row))
+    return TraceRows(header, rows)
+
+
+def _time(row: list[str], header: list[str]) -> float:
+    try:
+        return float(row[header.index(TIME)])
+    except ValueError:
+        return math.nan
+
+
+def first_difference(
+    recorded: TraceRows, replayed: TraceRows, *, complete: bool = True
+) -> TraceDifference | None:
+    """The first difference of ``replayed`` from ``recorded``, in ``replayed``'s order; None
+    if they are the same. ``complete``: False if the recording was cut short, so that rows
+    after its end are not differences."""
+    header = replayed.header
+    if recorded.header != header:
+        return TraceDifference(0.0, 0, "columns", ",".join(recorded.header), ",".join(header))
+    recorded_at = dict(recorded.rows)
+    end = recorded.end
+    for key, row in replayed.rows:
+        old = recorded_at.get(key)
+        if old is None:
+            if not complete and (end is None or key > end):
+                break
+            return TraceDifference(_time(row, header), key[0], "row", NO_ROW, f"step {key[1]}")
+        for name, was, now in zip(header, old, row, strict=True):
+            if was != now:
+                return TraceDifference(_time(row, header), key[0], name, was, now)
+    replayed_keys = {key for key, _ in replayed.rows}
+    for key, row in recorded.rows:
+        if key not in replayed_keys:
+            return TraceDifference(_time(row, header), key[0], "row", f"step {key[1]}", NO_ROW)
+    return None
