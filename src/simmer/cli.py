@@ -564,8 +564,8 @@ def sweep(
         typer.Option(
             "-o",
             "--output",
-            help="Folder for results.csv and summary.md.  "
-            "[default: SWEEP-results beside the sweep file]",
+            help="Folder for results.csv and summary.md "
+            "(default: SWEEP-results beside the sweep file)",
             show_default=False,
         ),
     ] = None,
