@@ -47,6 +47,7 @@ def spec_data(kind: str, controller: str, seeds: int) -> dict[str, Any]:
         "seeds": seeds,
         "seconds": 120,
         "wall_seconds": 60,
+        "keep": "nothing",  # what runs cost, not the failures' folders and frames
         # Part 2 of the lab: simulate_list commented out (Part 1's rays cost 4 reads a step)
         "grid": {"drives.w0.error.y": [0.02], "simulate_list": [[]]},
     }

@@ -4,8 +4,13 @@ and resumable, with a results table and a summary."""
 from __future__ import annotations
 
 import csv
+import os
 import shutil
+import signal
+import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -13,11 +18,16 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
+from simmer.record.runfolder import load_run
 from simmer.sweep import (
+    RunResult,
+    RunSpec,
     SweepError,
     SweepSpec,
     apply_overrides,
     build_config,
+    execute,
+    failure_kind,
     load_sweep,
     run_sweep,
     success_condition,
@@ -25,6 +35,7 @@ from simmer.sweep import (
     wilson_interval,
 )
 from simmer.sweep.spec import OUTCOME_FIELDS
+from simmer.world.replay import replay
 
 from helpers import EXAMPLES, REPO, SIMMER_PY
 
@@ -142,6 +153,130 @@ def test_runs_are_listed_in_order_with_stable_keys(tmp_path: Path) -> None:
     assert [run.key() for run in runs] == [run.key() for run in spec.runs()]
 
 
+def test_a_star_overrides_every_table_at_its_level() -> None:
+    data: dict[str, Any] = {"sensors": {"u0": {"error": 0}, "u1": {}}, "frame_rate": 60}
+    apply_overrides(data, (("sensors.*.error", 0.02),))
+    assert data["sensors"] == {"u0": {"error": 0.02}, "u1": {"error": 0.02}}
+    for key in ("motors.*.rotation", "sensors.*", "frame_rate.*.x"):
+        with pytest.raises(KeyError, match=r"\*"):
+            apply_overrides(data, ((key, 1),))
+    config = build_config(str(LAB1), (("sensors.*.error", 0.03),))
+    assert {config.device(f"u{i}").params.error for i in range(4)} == {0.03}  # type: ignore[attr-defined]
+
+
+SAMPLE = {
+    "count": 5,
+    "sensors.*.error": {"uniform": [0.0, 0.05]},
+    "drives.r0.error.rotation": {"normal": [0.01, 0.002]},
+    "drives.w0.bias.rotation": {"choice": [0.0, 0.2]},
+}
+
+
+def test_samples_are_drawn_from_the_sample_seed_and_combine_with_the_grid(
+    tmp_path: Path,
+) -> None:
+    spec = policy_sweep(
+        tmp_path, "drive_and_stop", seeds=2, grid={NOISE: [0.0, 0.1]}, sample=SAMPLE
+    )
+    keys = list(SAMPLE)[1:]
+    assert spec.columns == (NOISE, "sample", *keys)
+    assert spec.setting_columns == (NOISE,)
+    runs = spec.runs()
+    assert len(runs) == 2 * 5 * 2
+    assert len({run.key() for run in runs}) == len(runs)
+    draws = spec.draws()
+    assert len(draws) == 5
+    for uniform, normal, choice in draws:
+        assert 0.0 <= uniform <= 0.05
+        assert 0.0 < normal < 0.02
+        assert choice in (0.0, 0.2)
+    # Each grid value gets the same draws; the seed changes fastest.
+    assert [run.setting for run in runs[:4]] == [
+        (0.0, 0, *draws[0]), (0.0, 0, *draws[0]), (0.0, 1, *draws[1]), (0.0, 1, *draws[1]),
+    ]  # fmt: skip
+    assert runs[10].setting == (0.1, 0, *draws[0])
+    assert runs[0].overrides == ((NOISE, 0.0), *zip(keys, draws[0], strict=True))
+    # The same file, the same draws; another sample_seed, others; a key's draws are its own.
+    assert policy_sweep(tmp_path, "drive_and_stop", sample=SAMPLE).draws() == draws
+    other = policy_sweep(tmp_path, "drive_and_stop", sample=SAMPLE, sample_seed=1).draws()
+    assert [d[0] for d in other] != [d[0] for d in draws]
+    fewer = {"count": 3, "sensors.*.error": SAMPLE["sensors.*.error"]}
+    alone = policy_sweep(tmp_path, "drive_and_stop", sample=fewer).draws()
+    assert alone == [(d[0],) for d in draws[:3]]
+
+
+def test_sample_and_keep_mistakes_are_named(tmp_path: Path) -> None:
+    good = {"config": str(LAB1), "program": "python robot.py"}
+    uniform = {"uniform": [0, 0.1]}
+    mistakes = [
+        ({"sample": [1]}, r"\[sample\]: count = 20"),
+        ({"sample": {NOISE: uniform}}, "count: how many draws"),
+        ({"sample": {"count": 0, NOISE: uniform}}, "count: how many draws"),
+        ({"sample": {"count": 2}}, "it names none"),
+        ({"sample": {"count": 2, NOISE: [0, 0.1]}}, "one distribution"),
+        ({"sample": {"count": 2, NOISE: {"uniform": [0, 1], "normal": [0, 1]}}}, "one distrib"),
+        ({"sample": {"count": 2, NOISE: {"unifrom": [0, 1]}}}, "did you mean 'uniform'"),
+        ({"sample": {"count": 2, NOISE: {"uniform": [1, 0]}}}, "low <= high"),
+        ({"sample": {"count": 2, NOISE: {"uniform": [0]}}}, "two numbers"),
+        ({"sample": {"count": 2, NOISE: {"normal": [0, "x"]}}}, "two numbers"),
+        ({"sample": {"count": 2, NOISE: {"normal": [0, -1]}}}, "standard deviation"),
+        ({"sample": {"count": 2, NOISE: {"choice": []}}}, "non-empty list"),
+        ({"sample": {"count": 2, NOISE: uniform}, "grid": {NOISE: [0]}}, "also in \\[grid\\]"),
+        ({"sample_seed": 3}, "sample_seed: seeds the"),
+        ({"sample": {"count": 2, NOISE: uniform}, "sample_seed": -1}, "sample_seed"),
+        ({"keep": "failure"}, "did you mean 'failures'"),
+        ({"videos": -1}, "videos"),
+        ({"videos": 2, "keep": "nothing"}, "videos: a video goes in its run's folder"),
+        ({"grid": {NOISE: [0.0, 0.0]}}, "listed twice"),
+        ({"config": [str(LAB1), str(LAB1)]}, "each file once"),
+    ]
+    for more, message in mistakes:
+        with pytest.raises(SweepError, match=message):
+            sweep_from_dict({**good, **more}, tmp_path)
+
+
+def test_dotted_keys_need_no_quotes(tmp_path: Path) -> None:
+    """``drives.w0.error.y = [...]`` makes nested tables in TOML: the same key as quoted."""
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        f"config = '{LAB1}'\nprogram = 'python robot.py'\n"
+        "[grid]\ndrives.w0.error.y = [0, 0.1]\n"
+        "[sample]\ncount = 2\nsensors.u0.error = {uniform = [0, 0.1]}\n",
+        encoding="utf-8",
+    )
+    spec = load_sweep(sweep)
+    assert spec.columns == (NOISE, "sample", "sensors.u0.error")
+
+
+def test_run_folders_are_named_by_setting_and_seed(tmp_path: Path) -> None:
+    spec = policy_sweep(tmp_path, "drive_and_stop", seeds=2, grid={"sensors.*.error": [0.0, 0.1]})
+    names = spec.folder_names(spec.runs())
+    assert sorted(names.values()) == [
+        "sensors.all.error=0.0_seed0", "sensors.all.error=0.0_seed1",
+        "sensors.all.error=0.1_seed0", "sensors.all.error=0.1_seed1",
+    ]  # fmt: skip
+    sampled = policy_sweep(tmp_path, "drive_and_stop", sample=SAMPLE)
+    assert list(sampled.folder_names(sampled.runs()).values())[:2] == [
+        "sample0_seed0", "sample1_seed0",
+    ]  # fmt: skip
+    clash = policy_sweep(tmp_path, "drive_and_stop", grid={"frame_rate": ["a b", "a/b"]})
+    runs = clash.runs()
+    assert clash.folder_names(runs) == {run.key(): f"{run.key()}_seed0" for run in runs}
+
+
+def test_failures_are_told_apart() -> None:
+    fields = {"collisions": 0, "reached": False}
+    assert failure_kind("ok", fields, success=True) == ""
+    assert failure_kind("ok", fields, success=False) == "stopped-short"
+    assert failure_kind("ok", {**fields, "reached": True}, success=False) == "condition"
+    assert failure_kind("seconds", fields, success=False) == "timeout"
+    assert failure_kind("timeout", fields, success=False) == "timeout"
+    assert failure_kind("seconds", {**fields, "collisions": 2}, success=False) == "collision"
+    for status in ("error", "crashed", "invalid"):
+        assert failure_kind(status, {**fields, "collisions": 2}, success=False) == "crashed"
+    assert failure_kind("ok", {}, success=False) == "crashed"
+
+
 # ----------------------------------------------------------------------------- sweeps
 
 
@@ -151,8 +286,8 @@ def test_policy_sweep_is_parallel_reproducible_and_resumable(tmp_path: Path) -> 
     assert (first.runs, first.ran) == (6, 6)
     rows = read_table(tmp_path / "a" / "results.csv")
     assert list(rows[0]) == [
-        NOISE, "seed", "success", *OUTCOME_FIELDS,
-        "status", "exit_status", "wall_time", "run", "detail",
+        NOISE, "seed", "success", "failure", *OUTCOME_FIELDS,
+        "status", "exit_status", "wall_time", "run", "folder", "detail",
     ]  # fmt: skip
     assert [(row[NOISE], row["seed"]) for row in rows] == [
         (noise, seed) for noise in ("0.0", "0.1") for seed in "012"
@@ -175,7 +310,7 @@ def test_policy_sweep_is_parallel_reproducible_and_resumable(tmp_path: Path) -> 
     with pytest.raises(FileExistsError, match="--resume"):
         run_sweep(spec, tmp_path / "a", workers=2)
     summary = (tmp_path / "a" / "summary.md").read_text(encoding="utf-8")
-    assert "| 0.0 | 3 | 0 | 0% | 0.000 to 0.561 | ok 3 |" in summary
+    assert "| 0.0 | 3 | 0 | 0% | 0.000 to 0.561 | stopped-short 3 | ok 3 |" in summary
     assert (tmp_path / "a" / "success_rate.png").stat().st_size > 1000
     assert (tmp_path / "a" / "final_positions.png").stat().st_size > 1000
 
@@ -199,14 +334,16 @@ def test_failing_policies_are_recorded_and_the_sweep_finishes(tmp_path: Path) ->
         "kill_worker": ("crashed", "worker process died", {}),
     }
     for policy, (status, detail, limits) in cases.items():
-        spec = policy_sweep(tmp_path, policy, seeds=2, **limits)
+        spec = policy_sweep(tmp_path, policy, seeds=2, keep="nothing", **limits)
         done = run_sweep(spec, tmp_path / policy, workers=2)
         rows = read_table(tmp_path / policy / "results.csv")
         assert done.ran == 2
         assert [row["status"] for row in rows] == [status, status], policy
         assert all(detail in row["detail"] for row in rows), rows
         assert all(row["success"] == "False" for row in rows)
-    assert "**error**" in (tmp_path / "crash" / "summary.md").read_text(encoding="utf-8")
+    crashed = (tmp_path / "crash" / "summary.md").read_text(encoding="utf-8")
+    assert "### Crashed: the controller failed" in crashed
+    assert "this policy always fails" in crashed
     slept = read_table(tmp_path / "sleep_forever" / "results.csv")
     assert float(slept[0]["time"]) == pytest.approx(5.0, abs=0.1)
 
@@ -246,7 +383,7 @@ def test_minimal_sweep_file_through_the_cli(tmp_path: Path) -> None:
     assert all(row["exit_status"] == "0" for row in rows)
     assert float(rows[0]["task2_time"]) == pytest.approx(23.05, rel=0.10)
     summary = (tmp_path / "out" / "summary.md").read_text(encoding="utf-8")
-    assert "| 0.0 | 2 | 2 | 100% | 0.342 to 1.000 | ok 2 |" in summary
+    assert "| 0.0 | 2 | 2 | 100% | 0.342 to 1.000 | - | ok 2 |" in summary
     again = CliRunner().invoke(
         app, ["sweep", str(tmp_path / "sweep.toml"), "-o", str(tmp_path / "out"), "--resume"]
     )
@@ -254,8 +391,149 @@ def test_minimal_sweep_file_through_the_cli(tmp_path: Path) -> None:
     assert "0 run now" in again.output
 
 
-def test_the_example_sweep_file_loads() -> None:
-    spec = load_sweep(EXAMPLES / "sweep_dead_reckoning.toml")
+@pytest.mark.parametrize(
+    ("name", "runs", "columns"),
+    [
+        ("sweep_dead_reckoning.toml", 60, (NOISE, "drives.r0.error.rotation")),
+        (
+            "sweep_obstacle_avoidance.toml",
+            108,
+            ("sensors.*.error", "sample", "drives.w0.bias.rotation", "drives.w0.error.y"),
+        ),
+    ],
+)
+def test_the_example_sweep_files_load(name: str, runs: int, columns: tuple[str, ...]) -> None:
+    spec = load_sweep(EXAMPLES / name)
     assert spec.kind == "program"
-    assert len(spec.runs()) == 30
+    assert len(spec.runs()) == runs
+    assert spec.columns == columns
     assert spec.configs == (LAB1.resolve(),)
+    assert (spec.keep, spec.videos > 0) == ("failures", True)
+
+
+# ----------------------------------------------------------------------------- what is kept
+
+
+def test_failures_are_kept_with_frames_and_the_first_are_filmed(tmp_path: Path) -> None:
+    spec = policy_sweep(
+        tmp_path, "drive_and_stop", seeds=3, grid={NOISE: [0.0, 0.1]}, success="reached", videos=2
+    )
+    done = run_sweep(spec, tmp_path / "out", workers=2)
+    assert done.filmed == 2
+    out = tmp_path / "out"
+    rows = read_table(out / "results.csv")
+    assert {row["failure"] for row in rows} == {"stopped-short"}
+    names = spec.folder_names(spec.runs())
+    assert [row["folder"] for row in rows] == [f"runs/{names[row['run']]}" for row in rows]
+    videos = sorted(p.parent.name for p in (out / "runs").glob("*/video.mp4"))
+    assert videos == [f"{NOISE}=0.0_seed0", f"{NOISE}=0.0_seed1"]  # the first two, in order
+    for row in rows:
+        folder = out / row["folder"]
+        files = {p.name for p in folder.iterdir()}
+        assert {"manifest.json", "events.jsonl", "trace.csv", "report.md", "first.png"} <= files
+        assert (folder / "last.png").read_bytes()[:4] == b"\x89PNG"
+        replayed = replay(*load_run(folder))  # the kept run is the sweep's run
+        assert not replayed.differences
+        assert list(replayed.sim.robot.pose) == [
+            float(row["final_x"]),
+            float(row["final_y"]),
+            float(row["final_heading"]),
+        ]
+    assert (out / "runs" / videos[0] / "video.mp4").stat().st_size > 1000
+    summary = (out / "summary.md").read_text(encoding="utf-8")
+    assert "### Stopped short: finished without reaching the block (6)" in summary
+    first = f"runs/{NOISE}=0.0_seed0"
+    assert f'<img src="{first}/first.png"' in summary
+    assert f"[video]({first}/video.mp4), [run folder]({first}/)" in summary
+    assert "the first 2 failures in the sweep's order have a video" in summary
+
+    again = run_sweep(spec, out, workers=1, resume=True)  # nothing to run, nothing to film
+    assert (again.ran, again.filmed) == (0, 0)
+
+
+@pytest.mark.parametrize("keep", ["all", "nothing"])
+def test_keep_all_or_nothing(tmp_path: Path, keep: str) -> None:
+    spec = policy_sweep(tmp_path, "drive_and_stop", seeds=2, success="path_length > 10", keep=keep)
+    run_sweep(spec, tmp_path / "out", workers=1)
+    rows = read_table(tmp_path / "out" / "results.csv")
+    assert [row["success"] for row in rows] == ["True", "True"]
+    if keep == "nothing":
+        assert [row["folder"] for row in rows] == ["", ""]
+        assert not (tmp_path / "out" / "runs").exists()
+    else:
+        kept = [tmp_path / "out" / row["folder"] for row in rows]
+        assert all((folder / "report.json").exists() for folder in kept)
+        assert not any((folder / "first.png").exists() for folder in kept)  # successes
+
+
+# ----------------------------------------------------------------------------- isolation
+
+
+def test_a_crashing_program_is_recorded_with_its_stderr(tmp_path: Path) -> None:
+    command = (
+        f'"{sys.executable}" -c "import sys; print(42)\n'
+        "sys.stderr.write('Traceback: it went wrong here\\n'); sys.exit(3)\""
+    )
+    spec = sweep_from_dict(
+        {"config": str(LAB1), "program": command, "seeds": 2, "wall_seconds": 20}, tmp_path
+    )
+    done = run_sweep(spec, tmp_path / "out", workers=2)
+    rows = read_table(tmp_path / "out" / "results.csv")
+    assert done.ran == 2
+    assert [(row["status"], row["exit_status"], row["failure"]) for row in rows] == [
+        ("error", "3", "crashed"), ("error", "3", "crashed"),
+    ]  # fmt: skip
+    assert all("Traceback: it went wrong here" in row["detail"] for row in rows)
+    report = (tmp_path / "out" / rows[0]["folder"] / "report.md").read_text(encoding="utf-8")
+    assert "the control program exited with status 3" in report
+    summary = (tmp_path / "out" / "summary.md").read_text(encoding="utf-8")
+    assert "failed (exit status 3)" in summary
+    assert "it went wrong here" in summary
+
+
+def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
+    """A Dask worker runs each run in a thread of its own, where SIGALRM cannot reach."""
+    shutil.copy(POLICIES, tmp_path)
+    run = RunSpec(
+        str(LAB1), (), 0, "policy", "sweep_policies:spin_forever", str(tmp_path), None, 0.5
+    )
+    results: list[RunResult] = []
+    thread = threading.Thread(target=lambda: results.append(execute(run)))
+    thread.start()
+    thread.join(timeout=30)
+    assert not thread.is_alive()
+    assert results[0].status == "timeout"
+    assert 0.4 < results[0].wall_time < 5
+
+
+def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
+    shutil.copy(POLICIES, tmp_path)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        f"config = '{LAB1}'\npolicy = 'sweep_policies:drive_slowly'\nseeds = 16\n",
+        encoding="utf-8",
+    )
+    table = tmp_path / "out" / "results.csv"
+    command = [sys.executable, "-m", "simmer", "sweep", str(sweep), "-o", str(tmp_path / "out")]
+    stopped = subprocess.Popen(
+        [*command, "--workers", "2"],
+        start_new_session=True,  # its own process group, as a terminal's Ctrl-C reaches
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    deadline = time.monotonic() + 60
+    while not (table.exists() and len(table.read_text(encoding="utf-8").splitlines()) > 3):
+        assert time.monotonic() < deadline
+        assert stopped.poll() is None
+        time.sleep(0.05)
+    os.killpg(stopped.pid, signal.SIGINT)
+    _, err = stopped.communicate(timeout=60)
+    assert stopped.returncode == 130, err
+    assert b"--resume goes on" in err
+    finished = len(read_table(table))
+    assert 3 <= finished < 16
+    resumed = run_sweep(load_sweep(sweep), tmp_path / "out", workers=2, resume=True)
+    assert resumed.ran == 16 - finished
+    rows = read_table(table)
+    assert [row["seed"] for row in rows] == [str(seed) for seed in range(16)]
+    assert not (tmp_path / "out" / "results.csv.tmp").exists()

@@ -1,10 +1,18 @@
-"""Run a sweep's runs on an executor and record each as it finishes.
+"""Run a sweep's runs on an executor, record each as it finishes, then film the first failures.
 
 The engine is any :class:`concurrent.futures.Executor` given picklable :class:`RunSpec`
 descriptions: a local process pool by default (``spawn``ed workers, which import the simulator
-once and keep their configurations cached), or a Dask cluster's executor. A run's own failures
-are recorded by the worker (:func:`~simmer.sweep.runs.execute`); a worker process that dies is
-recorded here as ``crashed`` after one retry, and the sweep goes on with a fresh pool.
+once and keep their configurations cached and a simulation warm), or a Dask cluster's executor
+(:func:`dask_engine`: a scheduler's address, or a local cluster of worker processes). Ray is
+not offered: it is a heavy dependency for what Dask already does here, and would sit behind the
+same interface as one more ``concurrent.futures`` executor. A run's own failures are recorded by
+the worker (:func:`~simmer.sweep.runs.execute`); a local worker process that dies is recorded
+here as ``crashed`` after one retry, and the sweep goes on with a fresh pool (Dask restarts its
+workers itself, and a run it gives up on is recorded as ``crashed`` too).
+
+When every run is in the table, the first ``videos`` failures in the sweep's order (the same
+ones whatever the engine and however runs finished) are run again with a video, on the same
+executor: a run is repeatable, and a filmed run that went otherwise is said so in the summary.
 """
 
 from __future__ import annotations
@@ -19,6 +27,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, ParamSpec, TypeVar
 
 from rich.console import Console
 from rich.progress import (
@@ -31,12 +40,25 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from simmer.sweep.results import ResultsFile, flat_outcome, header, row, write_summary
-from simmer.sweep.runs import RunResult, RunSpec, execute
-from simmer.sweep.spec import SweepSpec, success_condition
+from simmer.sweep.results import (
+    ResultsFile,
+    header,
+    keep_files,
+    outcome_cells,
+    read_rows,
+    row,
+    write_summary,
+)
+from simmer.sweep.runs import RunResult, RunSpec, execute, film
+from simmer.sweep.spec import SweepSpec
+from simmer.sweep.success import OUTCOME_FIELDS
 
 Engine = Callable[[], Executor]
-"""Makes a fresh executor (called again if a local pool breaks)."""
+"""Makes a fresh executor (called again if a local pool breaks). An executor with a ``width``
+attribute (runs it carries out at once) gets twice that many runs at a time."""
+Work = Callable[[RunSpec], RunResult]
+P = ParamSpec("P")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -51,6 +73,8 @@ class SweepResult:
     successes: int
     """Successes among all the sweep's runs in results.csv."""
     wall_time: float
+    filmed: int = 0
+    """Failures filmed now."""
 
 
 def local_pool(workers: int | None = None) -> Engine:
@@ -61,27 +85,83 @@ def local_pool(workers: int | None = None) -> Engine:
     return lambda: ProcessPoolExecutor(max_workers=count, mp_context=context)
 
 
+class DaskExecutor(Executor):
+    """A Dask client's executor that closes the client, and the local cluster it runs on if
+    it started one, when it shuts down. ``width``: the cluster's threads."""
+
+    def __init__(self, client: Any, cluster: Any = None) -> None:
+        self.client = client
+        self.cluster = cluster
+        self._inner: Executor = client.get_executor(pure=False)  # a retried run runs again
+        self.width = max(1, sum(client.nthreads().values()))
+
+    def submit(self, fn: Callable[P, T], /, *args: P.args, **kwargs: P.kwargs) -> Future[T]:
+        """Run ``fn(*args, **kwargs)`` on the cluster."""
+        return self._inner.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        """Wait for (or cancel) what was submitted, then close the client and our cluster."""
+        self._inner.shutdown(wait=wait and not cancel_futures)
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
 def dask_engine(address: str | None = None, workers: int | None = None) -> Engine:
     """The executor of a Dask cluster at ``address``, or of a local cluster of ``workers``
-    processes; needs ``pip install "simmer[dask]"``."""
+    processes (default: one per core) with one thread each, closed with the sweep; needs
+    ``pip install "simmer[dask]"``."""
     try:  # an optional extra, imported by name: mypy need not know it
         distributed = importlib.import_module("distributed")
     except ImportError:
         raise RuntimeError(
             'the dask engine needs Dask: pip install "simmer[dask]" (dask[distributed])'
         ) from None
+    count = workers or os.cpu_count() or 1
 
     def make() -> Executor:
         if address is not None:
-            client = distributed.Client(address)
-        else:
-            cluster = distributed.LocalCluster(
-                n_workers=workers or os.cpu_count() or 1, threads_per_worker=1
-            )
+            return DaskExecutor(distributed.Client(address))
+        cluster = distributed.LocalCluster(
+            n_workers=count, threads_per_worker=1, processes=True, dashboard_address=":0"
+        )  # a free port: another cluster may have Dask's usual one
+        try:
             client = distributed.Client(cluster)
-        return client.get_executor()  # type: ignore[no-any-return]
+            client.wait_for_workers(count)
+        except BaseException:
+            cluster.close()
+            raise
+        return DaskExecutor(client, cluster)
 
     return make
+
+
+class _Pool:
+    """The engine's executor: made when first needed, made again after a local pool breaks,
+    shut down at the end."""
+
+    def __init__(self, engine: Engine, width: int) -> None:
+        self.engine = engine
+        self.default_width = width
+        self._current: Executor | None = None
+
+    def executor(self) -> Executor:
+        """The current executor (a new one if there is none)."""
+        if self._current is None:
+            self._current = self.engine()
+        return self._current
+
+    @property
+    def width(self) -> int:
+        """Runs the executor carries out at once."""
+        width = getattr(self._current, "width", None)
+        return width if isinstance(width, int) else self.default_width
+
+    def close(self, *, cancel: bool = False) -> None:
+        """Shut the executor down (waiting for its runs unless ``cancel``)."""
+        if self._current is not None:
+            current, self._current = self._current, None
+            current.shutdown(wait=True, cancel_futures=cancel)
 
 
 def run_sweep(
@@ -95,74 +175,125 @@ def run_sweep(
     source: str = "",
 ) -> SweepResult:
     """Run every run of ``spec`` not yet in ``folder``/results.csv (``resume``), append each
-    row as it finishes, then put the table in the sweep's order and write summary.md."""
+    row (and write each kept run's folder) as it finishes, put the table in the sweep's order,
+    film the first failures, and write summary.md."""
     started = time.perf_counter()
     runs = spec.runs()
+    names = spec.folder_names(runs)
     results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
     todo = [run for run in runs if run.key() not in results.done]
-    succeeded = success_condition(spec.success)
     success_column = results.columns.index("success")
     successes = sum(cells[success_column] == "True" for cells in results.done.values())
+    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
+    try:
+        with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
 
-    with _progress(console, len(runs), len(runs) - len(todo)) as advance:
+            def record(run: RunSpec, result: RunResult) -> None:
+                nonlocal successes
+                successes += result.success
+                kept = keep_files(folder, names[run.key()], result.files) if result.files else ""
+                results.add(row(run, result, kept))
+                advance(successes)
 
-        def record(run: RunSpec, result: RunResult) -> None:
-            nonlocal successes
-            ok = result.outcome is not None and succeeded(flat_outcome(result.outcome))
-            successes += ok
-            results.add(row(run, result, ok))
-            advance(successes)
-
-        try:
-            _execute_all(
-                todo, engine or local_pool(workers), workers or os.cpu_count() or 1, record
-            )
-        finally:
-            complete = all(run.key() in results.done for run in runs)
-            results.close([run.key() for run in runs] if complete else None)
+            try:
+                _execute_all(todo, pool, execute, record)
+            finally:
+                complete = all(run.key() in results.done for run in runs)
+                results.close([run.key() for run in runs] if complete else None)
+        filmed, remarks = _film_failures(spec, runs, folder, pool, console)
+    except BaseException:
+        pool.close(cancel=True)
+        raise
+    pool.close()
     from simmer.sweep.pictures import draw_pictures
 
-    write_summary(folder, spec, source, draw_pictures)
-    return SweepResult(folder, len(runs), len(todo), successes, time.perf_counter() - started)
+    write_summary(folder, spec, source, draw_pictures, remarks)
+    elapsed = time.perf_counter() - started
+    return SweepResult(folder, len(runs), len(todo), successes, elapsed, filmed)
+
+
+def _film_failures(
+    spec: SweepSpec, runs: list[RunSpec], folder: Path, pool: _Pool, console: Console | None
+) -> tuple[int, list[str]]:
+    """Film the first ``spec.videos`` failures in the sweep's order that had a simulation and
+    have no video yet, into their run folders; how many, and remarks for the summary."""
+    by_key = {r["run"]: r for r in read_rows(folder / "results.csv")}
+    failures = [
+        run
+        for run in runs
+        if (r := by_key.get(run.key())) is not None
+        and r["failure"]
+        and r["folder"]
+        and r["status"] not in ("crashed", "invalid")  # no simulation to film
+    ]
+    todo = [
+        run
+        for run in failures[: spec.videos]
+        if not (folder / by_key[run.key()]["folder"] / "video.mp4").exists()
+    ]
+    remarks: list[str] = []
+    if not todo:
+        return 0, remarks
+    with _progress(console, "videos", len(todo), 0) as advance:
+
+        def record(run: RunSpec, result: RunResult) -> None:
+            cells = by_key[run.key()]
+            if "video.mp4" in result.files:
+                (folder / cells["folder"] / "video.mp4").write_bytes(result.files["video.mp4"])
+            else:
+                remarks.append(f"No video of `{cells['folder']}`: its filming {result.status}.")
+            if result.outcome is not None and outcome_cells(result) != [
+                cells[name] for name in OUTCOME_FIELDS
+            ]:
+                remarks.append(
+                    f"The filmed run of `{cells['folder']}` went otherwise than in the sweep "
+                    "(is the controller repeatable?)."
+                )
+            advance(None)
+
+        _execute_all(todo, pool, film, record)
+    return len(todo), remarks
 
 
 def _execute_all(
-    runs: list[RunSpec],
-    engine: Engine,
-    width: int,
-    record: Callable[[RunSpec, RunResult], None],
+    runs: list[RunSpec], pool: _Pool, work: Work, record: Callable[[RunSpec, RunResult], None]
 ) -> None:
-    """Keep ``2 * width`` runs in flight on the engine's executor, recording each as it
-    finishes; a broken pool's runs in flight are retried once on a fresh pool, then recorded
-    as ``crashed``."""
+    """Keep twice the pool's width of runs in flight, ``work`` doing each, recording each as
+    it finishes; a broken local pool's runs in flight are retried once on a fresh pool, then
+    recorded as ``crashed``, as is a run the engine gave up on (Dask: its worker kept dying)."""
     waiting = list(reversed(runs))
     retried: set[str] = set()
     while waiting:
-        executor = engine()
+        executor = pool.executor()
+        width = pool.width
         flight: dict[Future[RunResult], RunSpec] = {}
         broken: list[RunSpec] = []
         dead = False
-        try:
-            while waiting or flight:
-                while not dead and waiting and len(flight) < _room(flight, waiting, retried, width):
-                    run = waiting.pop()
-                    try:
-                        flight[executor.submit(execute, run)] = run
-                    except BrokenProcessPool:  # never started: it goes to the next pool
-                        waiting.append(run)
-                        dead = True
-                if not flight:
-                    break
-                done, _ = wait(flight, return_when=FIRST_COMPLETED)
-                for future in done:
-                    run = flight.pop(future)
-                    try:
-                        record(run, future.result())
-                    except BrokenProcessPool:
-                        broken.append(run)
-                        dead = True
-        finally:
-            executor.shutdown(wait=True, cancel_futures=True)
+        while waiting or flight:
+            while not dead and waiting and len(flight) < _room(flight, waiting, retried, width):
+                run = waiting.pop()
+                try:
+                    flight[executor.submit(work, run)] = run
+                except BrokenProcessPool:  # never started: it goes to the next pool
+                    waiting.append(run)
+                    dead = True
+            if not flight:
+                break
+            done, _ = wait(flight, return_when=FIRST_COMPLETED)
+            for future in done:
+                run = flight.pop(future)
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    broken.append(run)
+                    dead = True
+                    continue
+                except Exception as exc:
+                    detail = f"the engine lost this run: {type(exc).__name__}: {exc}"
+                    result = RunResult(run.key(), "crashed", None, 0.0, None, detail)
+                record(run, result)
+        if dead:
+            pool.close(cancel=True)
         for run in broken:
             if run.key() in retried:
                 detail = "the worker process died during this run (twice)"
@@ -182,14 +313,17 @@ def _room(
 
 
 @contextmanager
-def _progress(console: Console | None, total: int, done: int) -> Iterator[Callable[[int], None]]:
-    """A progress bar (runs done, rate, ETA, success so far); yields what advances it by one
-    run, given the successes so far. Without a console, nothing is shown."""
+def _progress(
+    console: Console | None, label: str, total: int, done: int
+) -> Iterator[Callable[[int | None], None]]:
+    """A progress bar (runs done, rate, ETA, and the success rate so far if given); yields
+    what advances it by one run, given the successes so far or None. Without a console,
+    nothing is shown."""
     if console is None:
         yield lambda _successes: None
         return
     columns = (
-        TextColumn("sweep"),
+        TextColumn(label),
         BarColumn(),
         MofNCompleteColumn(),
         TaskProgressColumn(),
@@ -201,18 +335,18 @@ def _progress(console: Console | None, total: int, done: int) -> Iterator[Callab
     )
     started = time.perf_counter()
     with Progress(*columns, console=console, transient=False) as progress:
-        task = progress.add_task("sweep", total=total, completed=done, rate="", success="")
+        task = progress.add_task(label, total=total, completed=done, rate="", success="")
         counted = [done]
 
-        def advance(successes: int) -> None:
+        def advance(successes: int | None) -> None:
             counted[0] += 1
             ran = counted[0] - done
             per_minute = ran / max(time.perf_counter() - started, 1e-9) * 60
-            progress.update(
-                task,
-                advance=1,
-                rate=f"{per_minute:.0f} runs/min",
-                success=f"success {successes}/{counted[0]} ({successes / counted[0]:.0%})",
+            share = (
+                f"success {successes}/{counted[0]} ({successes / counted[0]:.0%})"
+                if successes is not None
+                else ""
             )
+            progress.update(task, advance=1, rate=f"{per_minute:.0f} runs/min", success=share)
 
         yield advance

@@ -1,21 +1,36 @@
-"""The pictures of a sweep's summary: success rate per setting with 95% Wilson intervals, and
-final positions over the maze coloured by success. Matplotlib (Agg, no pyplot) is imported
-only when they are drawn."""
+"""The pictures of a sweep's summary: success rate per setting with 95% Wilson intervals, final
+positions over the maze marked by how each run ended, the Task 2 time's distribution per
+setting, and with a random sample, success against each sampled key. Matplotlib (Agg, no
+pyplot) is imported only when they are drawn."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from simmer.sweep.results import SettingSummary
-from simmer.sweep.spec import SweepSpec
+import numpy as np
+
+from simmer.sweep.results import SettingSummary, wilson_interval
+from simmer.sweep.spec import Distribution, SweepSpec
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 SUCCESS_COLOR = "#2a9d4b"
 FAILURE_COLOR = "#d1495b"
+HISTOGRAM_COLOR = "#3a6ea5"
+FAILURE_MARKERS = {
+    "collision": ("X", "collision"),
+    "timeout": ("s", "timeout"),
+    "stopped-short": ("v", "stopped short"),
+    "condition": ("D", "condition false"),
+}
+"""How each kind of failure is marked among the final positions (a crashed run has none)."""
+SAMPLE_BINS = 8
+"""Bins at most along a sampled key (fewer for few draws: about 5 runs a bin at least)."""
 
 
 def draw_pictures(
@@ -23,38 +38,55 @@ def draw_pictures(
     spec: SweepSpec,
     rows: Sequence[Mapping[str, str]],
     summaries: Sequence[SettingSummary],
-) -> list[str]:
-    """Draw ``success_rate.png`` and ``final_positions.png`` into ``folder``; their names."""
+) -> list[tuple[str, str]]:
+    """Draw the summary's pictures into ``folder``; each one's file name and caption."""
     from matplotlib import style
 
+    drawn = []
     with style.context("default"):
         _save(_rate_figure(spec, summaries), folder / "success_rate.png")
+        drawn.append(("success_rate.png", "Success rate per setting, with 95% Wilson intervals"))
         _save(_positions_figure(spec, rows), folder / "final_positions.png")
-    return ["success_rate.png", "final_positions.png"]
+        drawn.append(("final_positions.png", "Where each run ended, marked by how it ended"))
+        task2 = _task2_figure(spec, rows, summaries)
+        if task2 is not None:
+            _save(task2, folder / "task2_time.png")
+            caption = "Task 2 time (first motion to the block) of the runs that reached it"
+            drawn.append(("task2_time.png", caption))
+        if spec.sample:
+            _save(_sample_figure(spec, rows), folder / "sampled.png")
+            caption = "Success rate against each sampled key, all settings together"
+            drawn.append(("sampled.png", caption))
+    return drawn
 
 
 def _save(fig: Figure, target: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig)
-    fig.savefig(target, format="png")
+    fig.savefig(target, format="png", dpi=100)
 
 
-def _label(spec: SweepSpec, setting: Sequence[str]) -> str:
+def _label(spec: SweepSpec, setting: Sequence[str], sep: str = "\n") -> str:
+    """A setting in a few words: each key by its last three names (``w0.error.y = 0.05``)."""
     return (
-        "\n".join(
-            f"{c.rsplit('.', 1)[-1] if len(spec.columns) > 1 else c} = {v}"
-            for c, v in zip(spec.columns, setting, strict=True)
+        sep.join(
+            f"{'.'.join(c.split('.')[-3:])} = {v}"
+            for c, v in zip(spec.setting_columns, setting, strict=True)
         )
         or "all runs"
     )
+
+
+def _in(spec: SweepSpec, summary: SettingSummary, r: Mapping[str, str]) -> bool:
+    return tuple(r[c] for c in spec.setting_columns) == summary.setting
 
 
 def _rate_figure(spec: SweepSpec, summaries: Sequence[SettingSummary]) -> Figure:
     """Success rate of each setting, with its 95% Wilson interval as the error bar."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(max(4.0, 1.3 * len(summaries) + 1.5), 4.0), layout="constrained")
+    fig = Figure(figsize=(max(4.5, 1.4 * len(summaries) + 1.5), 4.2), layout="constrained")
     ax = fig.add_subplot()
     places = list(range(len(summaries)))
     rates = [s.successes / s.runs for s in summaries]
@@ -68,6 +100,7 @@ def _rate_figure(spec: SweepSpec, summaries: Sequence[SettingSummary]) -> Figure
             xytext=(8, 0),
             textcoords="offset points",
             va="center",
+            fontsize=8,
         )
     ax.set_xticks(places, [_label(spec, s.setting) for s in summaries], fontsize=8)
     ax.set_xlim(-0.6, len(summaries) - 0.4)
@@ -79,7 +112,8 @@ def _rate_figure(spec: SweepSpec, summaries: Sequence[SettingSummary]) -> Figure
 
 
 def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure:
-    """Every run's final position over the (first) maze, green for success, red otherwise."""
+    """Every run's final position over the (first) maze: green for success, red otherwise,
+    with a marker for each kind of failure."""
     from matplotlib.figure import Figure
 
     from simmer.sweep.runs import build_config
@@ -87,7 +121,7 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
 
     settings = build_config(str(spec.configs[0]), ()).settings
     maze = Maze.from_settings(settings)
-    fig = Figure(figsize=(7.0, 7.0 * maze.height / maze.width + 0.6), layout="constrained")
+    fig = Figure(figsize=(8.0, 7.0 * maze.height / maze.width + 0.6), layout="constrained")
     ax = fig.add_subplot()
     for x1, y1, x2, y2 in maze.segments:
         ax.plot([x1, x2], [y1, y2], color="black", lw=2)
@@ -95,17 +129,21 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")
     sx, sy = settings.robot_start_position
     ax.plot(sx, sy, "^", ms=9, mfc="none", mec="#555555", label="start")
-    for success, color, name in (
-        (True, SUCCESS_COLOR, "success"),
-        (False, FAILURE_COLOR, "failure"),
-    ):
-        chosen = [r for r in rows if (r["success"] == "True") == success and r["final_x"]]
+    groups = [("", "o", "success", SUCCESS_COLOR)] + [
+        (kind, marker, name, FAILURE_COLOR) for kind, (marker, name) in FAILURE_MARKERS.items()
+    ]
+    for kind, marker, name, color in groups:
+        chosen = [r for r in rows if r["failure"] == kind and r["final_x"]]
+        if not chosen and kind:
+            continue
         ax.scatter(
             [float(r["final_x"]) for r in chosen],
             [float(r["final_y"]) for r in chosen],
-            s=18,
+            s=32,
+            marker=marker,
             color=color,
-            alpha=0.7,
+            alpha=0.65,
+            linewidths=0,
             label=f"{name} ({len(chosen)})",
             zorder=3,
         )
@@ -113,6 +151,97 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     ax.set_xlim(-margin, maze.width + margin)
     ax.set_ylim(maze.height + margin, -margin)  # +y down the page, as in the window
     ax.set_aspect("equal")
+    ax.set_xlabel("x (in)")
+    ax.set_ylabel("y (in)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8)
-    ax.set_title("final positions", fontsize=10)
+    ax.set_title(f"final positions of {len(rows)} runs", fontsize=10)
     return fig
+
+
+def _task2_figure(
+    spec: SweepSpec, rows: Sequence[Mapping[str, str]], summaries: Sequence[SettingSummary]
+) -> Figure | None:
+    """A histogram of the Task 2 time per setting (shared bins and axis), of the runs that
+    reached the block; None if none did."""
+    from matplotlib.figure import Figure
+
+    times = [
+        [float(r["task2_time"]) for r in rows if _in(spec, s, r) and r["task2_time"]]
+        for s in summaries
+    ]
+    every = [t for group in times for t in group]
+    if not every:
+        return None
+    bins = np.histogram_bin_edges(every, bins=min(30, max(8, 2 * round(math.sqrt(len(every))))))
+    fig = Figure(figsize=(7.0, 1.0 + 1.25 * len(summaries)), layout="constrained")
+    axes = fig.subplots(len(summaries), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, s, group in zip(axes, summaries, times, strict=True):
+        counts, _, _ = ax.hist(group, bins=bins, color=HISTOGRAM_COLOR)
+        reached = f"{len(group)}/{s.runs} reached"
+        if group:
+            reached += f", median {np.median(group):.2f} s"
+        ax.set_title(f"{_label(spec, s.setting, ', ')}: {reached}", loc="left", fontsize=8)
+        ax.set_ylim(0, max(1.0, float(np.max(counts))) * 1.1)
+        ax.set_ylabel("runs", fontsize=8)
+        ax.yaxis.get_major_locator().set_params(integer=True)
+        ax.tick_params(labelsize=8)
+        ax.grid(axis="x", alpha=0.3)
+    axes[-1].set_xlabel("Task 2 time (s), from the first motion to reaching the block")
+    fig.suptitle("Task 2 time of the runs that reached the block", fontsize=10)
+    return fig
+
+
+def _sample_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure:
+    """For each sampled key, the success rate (95% Wilson interval) in bins of its values, or
+    per value of a choice, over every setting; each run a tick above (success) or below."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.6 * len(spec.sample), 3.8), layout="constrained")
+    axes = fig.subplots(1, len(spec.sample), squeeze=False)[0]
+    for ax, (key, distribution) in zip(axes, spec.sample, strict=True):
+        _sample_panel(ax, key, distribution, rows)
+    return fig
+
+
+def _sample_panel(
+    ax: Axes, key: str, distribution: Distribution, rows: Sequence[Mapping[str, str]]
+) -> None:
+    ok = [r["success"] == "True" for r in rows]
+    if distribution.kind == "choice":
+        labels = list(dict.fromkeys(str(v) for v in distribution.values))
+        where = np.array([labels.index(r[key]) for r in rows], dtype=float)
+        centres = np.arange(len(labels), dtype=float)
+        members = [where == i for i in range(len(labels))]
+        ax.set_xticks(centres, labels)
+    else:
+        where = np.array([float(r[key]) for r in rows])
+        count = max(1, min(SAMPLE_BINS, len(rows) // 5))
+        edges = np.linspace(where.min(), where.max(), count + 1)
+        place = np.clip(np.searchsorted(edges, where, side="right") - 1, 0, count - 1)
+        centres = (edges[:-1] + edges[1:]) / 2
+        members = [place == i for i in range(count)]
+    success = np.array(ok)
+    rates, low, high, shown = [], [], [], []
+    for centre, member in zip(centres, members, strict=True):
+        runs = int(member.sum())
+        if not runs:
+            continue
+        wins = int(success[member].sum())
+        a, b = wilson_interval(wins, runs)
+        rates.append(wins / runs)
+        low.append(max(0.0, wins / runs - a))
+        high.append(max(0.0, b - wins / runs))
+        shown.append(centre)
+        ax.annotate(
+            f"{wins}/{runs}", (centre, wins / runs), xytext=(6, 0), textcoords="offset points",
+            va="center", fontsize=7,
+        )  # fmt: skip
+    ax.errorbar(shown, rates, yerr=[low, high], fmt="o", capsize=4, color="black")
+    ax.plot(where[success], np.full(int(success.sum()), 1.1), "|", color=SUCCESS_COLOR, ms=8)
+    ax.plot(where[~success], np.full(int((~success).sum()), -0.1), "|", color=FAILURE_COLOR, ms=8)
+    ax.set_ylim(-0.18, 1.18)
+    ax.set_yticks([0, 0.25, 0.5, 0.75, 1])
+    ax.set_xlabel(f"{key} ~ {distribution}", fontsize=8)
+    ax.set_ylabel("success rate", fontsize=8)
+    ax.tick_params(labelsize=8)
+    ax.grid(axis="y", alpha=0.3)

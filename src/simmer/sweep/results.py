@@ -1,6 +1,7 @@
 """A sweep's results: ``results.csv`` (one row per run, appended as runs finish, put in the
-sweep's order at the end) and ``summary.md`` (success rate per setting with 95% Wilson score
-intervals, and pictures).
+sweep's order at the end), the kept runs' folders under ``runs/``, and ``summary.md`` (success
+rate per setting with 95% Wilson score intervals, pictures, and a gallery of the failing runs
+grouped by how they failed).
 """
 
 from __future__ import annotations
@@ -8,17 +9,45 @@ from __future__ import annotations
 import csv
 import math
 import os
+import shutil
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
 from simmer.sweep.runs import RunResult, RunSpec
-from simmer.sweep.spec import OUTCOME_FIELDS, SweepSpec
+from simmer.sweep.spec import SweepSpec
+from simmer.sweep.success import FAILURES, OUTCOME_FIELDS, failure_kind, flat_outcome
+
+__all__ = [
+    "RUNS",
+    "ResultsFile",
+    "SettingSummary",
+    "flat_outcome",
+    "header",
+    "keep_files",
+    "outcome_cells",
+    "read_rows",
+    "row",
+    "summarize",
+    "wilson_interval",
+    "write_summary",
+]
 
 Z95 = 1.959963984540054
 """The standard normal quantile for a two-sided 95% interval."""
-TAIL_COLUMNS = ("status", "exit_status", "wall_time", "run", "detail")
+TAIL_COLUMNS = ("status", "exit_status", "wall_time", "run", "folder", "detail")
+RUNS = "runs"
+"""The folder (in the sweep's) of the kept runs' folders."""
+GALLERY = 8
+"""Failing runs shown per kind of failure in summary.md (results.csv lists them all)."""
+FRAME_WIDTH = 300
+"""Pixels the gallery shows a frame across."""
+Pictures = Callable[
+    [Path, SweepSpec, Sequence[Mapping[str, str]], Sequence["SettingSummary"]],
+    list[tuple[str, str]],
+]
+"""Draws a summary's pictures into its folder; returns each file's name and caption."""
 
 
 def wilson_interval(successes: int, trials: int, z: float = Z95) -> tuple[float, float]:
@@ -30,21 +59,15 @@ def wilson_interval(successes: int, trials: int, z: float = Z95) -> tuple[float,
     z2 = z * z
     centre = (p + z2 / (2 * trials)) / (1 + z2 / trials)
     half = z * math.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials)) / (1 + z2 / trials)
-    return max(0.0, centre - half), min(1.0, centre + half)
+    low = 0.0 if successes == 0 else max(0.0, centre - half)  # exactly, not 1e-17 off
+    high = 1.0 if successes == trials else min(1.0, centre + half)
+    return low, high
 
 
 def header(spec: SweepSpec) -> list[str]:
-    """results.csv's columns: the swept keys, seed, success, the outcome, then the run's."""
-    return [*spec.columns, "seed", "success", *OUTCOME_FIELDS, *TAIL_COLUMNS]
-
-
-def flat_outcome(outcome: Mapping[str, Any] | None) -> dict[str, Any]:
-    """An outcome's fields as the table has them (the final pose in three columns)."""
-    if outcome is None:
-        return {}
-    fields = {k: v for k, v in outcome.items() if k != "final_pose"}
-    fields["final_x"], fields["final_y"], fields["final_heading"] = outcome["final_pose"]
-    return fields
+    """results.csv's columns: the swept keys, seed, success and how the run failed, the
+    outcome, then the run's own (status, exit status, wall time, key, folder, output)."""
+    return [*spec.columns, "seed", "success", "failure", *OUTCOME_FIELDS, *TAIL_COLUMNS]
 
 
 def _cell(value: Any) -> str:
@@ -56,20 +79,39 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
-def row(run: RunSpec, result: RunResult, success: bool) -> list[str]:
-    """One run's row of results.csv."""
+def outcome_cells(result: RunResult) -> list[str]:
+    """A run's outcome as results.csv has it (:data:`OUTCOME_FIELDS`' columns)."""
     fields = flat_outcome(result.outcome)
+    return [_cell(fields.get(name)) for name in OUTCOME_FIELDS]
+
+
+def row(run: RunSpec, result: RunResult, folder: str = "") -> list[str]:
+    """One run's row of results.csv (``folder``: its kept folder, relative to the sweep's)."""
     return [
         *map(_cell, run.setting),
         str(run.seed),
-        str(success),
-        *(_cell(fields.get(name)) for name in OUTCOME_FIELDS),
+        str(result.success),
+        failure_kind(result.status, flat_outcome(result.outcome), result.success),
+        *outcome_cells(result),
         result.status,
         _cell(result.exit_status),
         f"{result.wall_time:.3f}",
         result.key,
+        folder,
         " | ".join(result.detail.splitlines()[-8:]),
     ]
+
+
+def keep_files(folder: Path, name: str, files: Mapping[str, bytes]) -> str:
+    """Write a run's files into ``folder``/runs/``name`` (replacing what a stopped sweep left
+    there); its path relative to ``folder``."""
+    target = folder / RUNS / name
+    if target.exists():
+        shutil.rmtree(target)
+    target.mkdir(parents=True)
+    for file, data in files.items():
+        (target / file).write_bytes(data)
+    return f"{RUNS}/{name}"
 
 
 class ResultsFile:
@@ -125,12 +167,13 @@ class ResultsFile:
 
 @dataclass(frozen=True)
 class SettingSummary:
-    """The runs of one setting (one combination of the swept values)."""
+    """The runs of one setting (one combination of the grid's values)."""
 
     setting: tuple[str, ...]
     runs: int
     successes: int
     statuses: dict[str, int]
+    failures: dict[str, int]
 
     @property
     def interval(self) -> tuple[float, float]:
@@ -138,19 +181,28 @@ class SettingSummary:
         return wilson_interval(self.successes, self.runs)
 
 
+def _counts(values: Iterable[str]) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    for value in values:
+        counts[value] = counts.get(value, 0) + 1
+    return counts
+
+
 def summarize(columns: Sequence[str], rows: Sequence[Mapping[str, str]]) -> list[SettingSummary]:
     """Success counts per setting, in the order settings first appear."""
     groups: dict[tuple[str, ...], list[Mapping[str, str]]] = {}
     for cells in rows:
         groups.setdefault(tuple(cells[c] for c in columns), []).append(cells)
-    summaries = []
-    for setting, members in groups.items():
-        statuses: dict[str, int] = {}
-        for cells in members:
-            statuses[cells["status"]] = statuses.get(cells["status"], 0) + 1
-        successes = sum(cells["success"] == "True" for cells in members)
-        summaries.append(SettingSummary(setting, len(members), successes, statuses))
-    return summaries
+    return [
+        SettingSummary(
+            setting,
+            len(members),
+            sum(cells["success"] == "True" for cells in members),
+            _counts(cells["status"] for cells in members),
+            _counts(cells["failure"] for cells in members if cells["failure"]),
+        )
+        for setting, members in groups.items()
+    ]
 
 
 def read_rows(path: Path) -> list[dict[str, str]]:
@@ -160,59 +212,220 @@ def read_rows(path: Path) -> list[dict[str, str]]:
 
 
 def write_summary(
-    folder: Path, spec: SweepSpec, source: str, pictures: Callable[..., list[str]] | None = None
+    folder: Path,
+    spec: SweepSpec,
+    source: str,
+    pictures: Pictures | None = None,
+    remarks: Sequence[str] = (),
 ) -> Path:
-    """Write ``summary.md`` from ``results.csv`` in ``folder`` (with ``pictures``, a function
-    drawing them into ``folder`` and returning their file names)."""
+    """Write ``summary.md`` from ``results.csv`` in ``folder``: with ``pictures``, a function
+    drawing them into ``folder``; ``remarks``, lines to add at the end."""
     rows = read_rows(folder / "results.csv")
-    columns = list(spec.columns)
+    columns = list(spec.setting_columns)
     summaries = summarize(columns, rows)
     total = sum(s.successes for s in summaries)
     low, high = wilson_interval(total, len(rows))
     lines = [
         f"# Sweep {source}" if source else "# Sweep",
         "",
-        f"{len(rows)} runs: {spec.kind} `{spec.controller}`, seeds {_seeds(spec.seeds)}, "
-        f"success when `{spec.success}`.",
+        f"{len(rows)} runs: {spec.kind} `{spec.controller}`, seeds {_seeds(spec.seeds)}"
+        f"{_sampled(spec)}, success when `{spec.success}`.",
         "",
         f"Overall success {total}/{len(rows)} = {_rate(total, len(rows))} "
         f"(95% Wilson interval {low:.3f} to {high:.3f}).",
         "",
         "| "
         + " | ".join(
-            [*(f"`{c}`" for c in columns), "runs", "successes", "rate", "95% interval", "statuses"]
+            [
+                *(f"`{c}`" for c in columns),
+                "runs",
+                "successes",
+                "rate",
+                "95% interval",
+                "failures",
+                "statuses",
+            ]
         )
         + " |",
-        "|" + "---|" * (len(columns) + 5),
+        "|" + "---|" * (len(columns) + 6),
     ]
     for s in summaries:
         a, b = s.interval
-        statuses = ", ".join(f"{k} {v}" for k, v in sorted(s.statuses.items()))
         cells = [
             *s.setting,
             str(s.runs),
             str(s.successes),
             _rate(s.successes, s.runs),
             f"{a:.3f} to {b:.3f}",
-            statuses,
+            _listed(s.failures, FAILURES) or "-",
+            _listed(s.statuses),
         ]
-        lines.append("| " + " | ".join(cells) + " |")
-    failed = [r for r in rows if r["status"] not in ("ok", "seconds")]
-    if failed:
-        lines += ["", "## Runs that did not finish", ""]
-        lines += [
-            f"- seed {r['seed']}"
-            + "".join(f", `{c}` = {r[c]}" for c in columns)
-            + f": **{r['status']}**"
-            + (f": {r['detail'][-200:]}" if r["detail"] else "")
-            for r in failed
-        ]
+        lines.append("| " + " | ".join(_escape(c) for c in cells) + " |")
     if pictures is not None:
-        names = pictures(folder, spec, rows, summaries)
-        lines += ["", "## Pictures", ""] + [f"![{name}]({name})" for name in names]
+        drawn = pictures(folder, spec, rows, summaries)
+        lines += ["", "## Pictures", ""]
+        for name, caption in drawn:
+            lines += [f"![{caption}]({name})", "", f"*{caption}*", ""]
+        lines.pop()
+    lines += _gallery(folder, spec, rows)
+    if remarks:
+        lines += ["", "## Notes", "", *(f"- {remark}" for remark in remarks)]
     path = folder / "summary.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _gallery(folder: Path, spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """The failing runs, by how they failed: setting, seed, first and last frame, links to
+    the video and the run's folder, and what happened (at most :data:`GALLERY` of each)."""
+    failed = [r for r in rows if r["failure"]]
+    if not failed:
+        return []
+    kinds = _counts(r["failure"] for r in failed)
+    if spec.keep == "nothing":
+        kept = 'No run\'s folder was kept (keep = "nothing").'
+    else:
+        kept = (
+            f'Their folders are in `{RUNS}/` (keep = "{spec.keep}"): manifest, events, trace, '
+            "report, and the first and last frame"
+        )
+        if spec.videos == 1:
+            kept += "; the first failure in the sweep's order has a video."
+        elif spec.videos:
+            kept += f"; the first {spec.videos} failures in the sweep's order have a video."
+        else:
+            kept += "."
+    lines = [
+        "",
+        "## Failing runs",
+        "",
+        f"{_plural(len(failed), 'run')} failed: {_listed(kinds, FAILURES)} (the `failure` "
+        f"column of results.csv). {kept}",
+    ]
+    for kind, meaning in FAILURES.items():
+        members = [r for r in failed if r["failure"] == kind]
+        if not members:
+            continue
+        lines += [
+            "",
+            f"### {kind.replace('-', ' ').capitalize()}: {meaning} ({len(members)})",
+            "",
+            "| setting | seed | first frame | last frame | files | what happened |",
+            "|---|---|---|---|---|---|",
+        ]
+        for r in _chosen(folder, spec, members):
+            cells = [
+                _setting_text(spec, r),
+                r["seed"],
+                _frame(folder, r, "first.png"),
+                _frame(folder, r, "last.png"),
+                _links(folder, r),
+                _happened(r),
+            ]
+            lines.append("| " + " | ".join(_escape(c) for c in cells) + " |")
+        if len(members) > GALLERY:
+            lines += [
+                "",
+                f"And {len(members) - GALLERY} more: results.csv's rows with failure = {kind}.",
+            ]
+    return lines
+
+
+def _chosen(
+    folder: Path, spec: SweepSpec, members: Sequence[Mapping[str, str]]
+) -> list[Mapping[str, str]]:
+    """At most :data:`GALLERY` of a kind of failure, in the sweep's order: those with a video
+    first, then one from each setting in turn (the first failure of each, then the second...),
+    so the gallery shows as many settings as it can."""
+    turn: dict[tuple[str, ...], int] = {}
+    ranked = []
+    for index, r in enumerate(members):
+        setting = tuple(r[c] for c in spec.setting_columns)
+        turn[setting] = turn.get(setting, -1) + 1
+        filmed = bool(r["folder"]) and (folder / r["folder"] / "video.mp4").exists()
+        ranked.append((not filmed, turn[setting], index))
+    picked = sorted(index for *_, index in sorted(ranked)[:GALLERY])
+    return [members[index] for index in picked]
+
+
+def _setting_text(spec: SweepSpec, r: Mapping[str, str]) -> str:
+    sampled = {key for key, _ in spec.sample}
+    parts = [
+        f"sample {r[c]}" if c == "sample" else f"`{c}` = {r[c]}"
+        for c in spec.columns
+        if c not in sampled
+    ]
+    shown = [f"`{c}` = {_short(r[c])}" for c in spec.columns if c in sampled]
+    text = ", ".join(parts)
+    return f"{text} ({', '.join(shown)})" if shown else text or "-"
+
+
+def _short(value: str) -> str:
+    """A drawn number with 4 significant digits (the table has it exactly)."""
+    try:
+        return f"{float(value):.4g}"
+    except ValueError:
+        return value
+
+
+def _frame(folder: Path, r: Mapping[str, str], name: str) -> str:
+    path = f"{r['folder']}/{name}"
+    if not r["folder"] or not (folder / path).exists():
+        return "-"
+    return f'<img src="{path}" width="{FRAME_WIDTH}" alt="{name[:-4]} frame">'
+
+
+def _links(folder: Path, r: Mapping[str, str]) -> str:
+    if not r["folder"]:
+        return "-"
+    video = f"{r['folder']}/video.mp4"
+    links = [f"[video]({video})"] if (folder / video).exists() else []
+    return ", ".join([*links, f"[run folder]({r['folder']}/)"])
+
+
+def _happened(r: Mapping[str, str]) -> str:
+    """A few words on the run: how it ended and the outcome's telling figures."""
+    status = r["status"]
+    if not r["time"]:
+        return f"{status}: {r['detail'][-160:]}" if r["detail"] else status
+    ended = {
+        "ok": "finished",
+        "error": f"failed (exit status {r['exit_status']})" if r["exit_status"] else "failed",
+        "seconds": "simulated-time limit",
+        "timeout": "wall-clock limit",
+    }.get(status, status)
+    facts = [f"{ended} at {float(r['time']):.1f} s"]
+    if r["collisions"] != "0":
+        collisions = _plural(int(r["collisions"]), "collision")
+        facts.append(f"{collisions}, the first at {float(r['first_collision']):.1f} s")
+    if r["reached"] == "True":
+        facts.append(f"Task 2 time {float(r['task2_time']):.1f} s")
+    facts.append(f"ended at ({float(r['final_x']):.1f}, {float(r['final_y']):.1f}) in")
+    if status == "error" and r["detail"]:
+        facts.append(r["detail"][-160:])
+    return "; ".join(facts)
+
+
+def _plural(count: int, noun: str) -> str:
+    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"
+
+
+def _escape(text: str) -> str:
+    """A table cell's text (a ``|`` would end the cell)."""
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def _listed(counts: Mapping[str, int], order: Iterable[str] | None = None) -> str:
+    names = [n for n in order if n in counts] if order is not None else sorted(counts)
+    return ", ".join(f"{name} {counts[name]}" for name in names)
+
+
+def _sampled(spec: SweepSpec) -> str:
+    if not spec.sample:
+        return ""
+    keys = ", ".join(f"`{key}` ~ {distribution}" for key, distribution in spec.sample)
+    grid = " for each setting" if spec.setting_columns else ""
+    return f", {spec.sample_count} random draws{grid} (sample_seed {spec.sample_seed}) of {keys}"
 
 
 def _rate(successes: int, runs: int) -> str:

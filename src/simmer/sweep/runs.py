@@ -3,36 +3,53 @@ carries it out (:func:`execute`), recording whatever happens as a :class:`RunRes
 
 A worker process is given descriptions only, never a live simulation: it loads and caches each
 configuration once (:func:`load_data`), applies the run's overrides to the configuration's data
-before validation (:func:`apply_overrides`), and runs the controller on the lockstep clock, so
-the same description gives the same outcome in any process. What the controller prints goes to
-a file of the run's own, whose tail is kept with the result.
+before validation (:func:`apply_overrides`), keeps one simulation warm per configuration and
+overrides and resets it to the run's seed (:data:`WARM`), and runs the controller on the
+lockstep clock, so the same description gives the same outcome in any process and in any order.
+What the controller prints goes to a file of the run's own, whose tail is kept with the result.
+A run to keep is recorded into a scratch folder whose files (with pictures of the first and last
+frame for a failure) travel back in the result, so workers need no folder shared with the sweep.
 """
 
 from __future__ import annotations
 
 import copy
+import ctypes
 import hashlib
 import importlib
+import io
 import json
 import os
 import signal
 import sys
 import tempfile
+import threading
 import time
 import traceback
+from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from types import FrameType
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from simmer.config.models import SimConfig
+from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
+
+if TYPE_CHECKING:
+    from simmer.world import Simulation
 
 ControllerKind = Literal["program", "policy"]
+Keep = Literal["nothing", "failures", "all"]
+"""Which runs' folders a sweep keeps."""
 STDERR_TAIL = 800
 """Characters of a run's output kept with its result (the end: where a traceback says why)."""
+FRAME_SCALE = 2
+"""A failure's first and last frames are the window's size divided by this (HUD included)."""
+ENDED_BY = {"ok": "program", "error": "error", "seconds": "seconds", "timeout": "timeout"}
+"""A policy run's status as its run folder's report says how it ended."""
 
 
 @dataclass(frozen=True)
@@ -56,10 +73,18 @@ class RunSpec:
     """Wall-clock limit; a program's whole process tree is stopped when it passes."""
     setting: tuple[Any, ...] = field(default=(), compare=False)
     """The values of the swept keys, in the sweep's column order (for the results table)."""
+    sample: int | None = None
+    """The number of the sample's draw the run is for (two draws may give the same values)."""
+    success: str = DEFAULT_SUCCESS
+    """The success condition (:func:`~simmer.sweep.success.success_condition`): the worker
+    decides with it whether the run is a failure to keep."""
+    keep: Keep = "nothing"
+    """Whose files come back with the result: no run's, failures' or every run's."""
 
     def key(self) -> str:
-        """A stable hash of everything that decides the run's outcome (resume uses it)."""
-        described = {
+        """A stable hash of everything that decides the run's outcome, and of the sample's draw
+        it is for (resume uses it)."""
+        described: dict[str, Any] = {
             "config": self.config,
             "overrides": [list(pair) for pair in self.overrides],
             "seed": self.seed,
@@ -68,6 +93,8 @@ class RunSpec:
             "seconds": self.seconds,
             "wall_seconds": self.wall_seconds,
         }
+        if self.sample is not None:
+            described["sample"] = self.sample
         text = json.dumps(described, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -87,6 +114,10 @@ class RunResult:
     exit_status: int | None = None
     detail: str = ""
     """The tail of what the run printed (or why it could not run)."""
+    success: bool = False
+    files: dict[str, bytes] = field(default_factory=dict, repr=False)
+    """A kept run's folder (manifest.json, events.jsonl, trace.csv, report.json, report.md),
+    for a failure with first.png and last.png; a filmed run's video.mp4."""
 
 
 class LimitReached(Exception):
@@ -97,20 +128,41 @@ class LimitReached(Exception):
         self.status = status
 
 
+class WallLimitReached(LimitReached):
+    """The wall-clock limit, raised in a thread from outside (so it takes no arguments)."""
+
+    def __init__(self) -> None:
+        super().__init__("timeout")
+
+
 def apply_overrides(data: dict[str, Any], overrides: tuple[tuple[str, Any], ...]) -> None:
     """Set each dotted key (``drives.w0.error.x``) in configuration data, making the tables
-    on the way that are missing (a key the file left at its default); raises ``KeyError``
-    if the way runs through something that is not a table."""
+    on the way that are missing (a key the file left at its default). A ``*`` stands for each
+    table at its level (``sensors.*.error``: every sensor's error). Raises ``KeyError`` if the
+    way runs through something that is not a table, or a ``*`` finds no table."""
     for dotted, value in overrides:
-        *tables, last = dotted.split(".")
-        node = data
-        for depth, name in enumerate(tables):
-            child = node.setdefault(name, {})
-            if not isinstance(child, dict):
-                way = ".".join(tables[: depth + 1])
-                raise KeyError(f"{dotted}: {way} is a value, not a table")
-            node = child
-        node[last] = copy.deepcopy(value)
+        _set(data, dotted.split("."), value, dotted, ())
+
+
+def _set(
+    node: dict[str, Any], names: list[str], value: Any, dotted: str, way: tuple[str, ...]
+) -> None:
+    name, *rest = names
+    if name == "*":
+        tables = [key for key, child in node.items() if isinstance(child, dict)]
+        if not rest or not tables:
+            where = ".".join(way) or "the top level"
+            raise KeyError(f"{dotted}: * stands for each table in {where}, and there is none")
+        for key in tables:
+            _set(node[key], rest, value, dotted, (*way, key))
+        return
+    if not rest:
+        node[name] = copy.deepcopy(value)
+        return
+    child = node.setdefault(name, {})
+    if not isinstance(child, dict):
+        raise KeyError(f"{dotted}: {'.'.join((*way, name))} is a value, not a table")
+    _set(child, rest, value, dotted, (*way, name))
 
 
 @lru_cache(maxsize=8)
@@ -133,44 +185,187 @@ def _build_config(path: str, overrides_json: str) -> SimConfig:
     return config_from_dict(data, path, Path(path).parent, original=original)
 
 
+class WarmSimulations:
+    """The simulations a worker process keeps warm: one per configuration file and overrides
+    (the last :attr:`size` used), reset to each run's seed instead of built again."""
+
+    def __init__(self, size: int = 4) -> None:
+        self.size = size
+        self.built = 0
+        """Simulations built so far (the others were reset)."""
+        self._kept: OrderedDict[tuple[str, str], Simulation] = OrderedDict()
+
+    def simulation(self, run: RunSpec, config: SimConfig) -> Simulation:
+        """A simulation of ``config`` (the run's configuration with its overrides) at its
+        start, with the run's seed and no observers."""
+        from simmer.world import Simulation
+
+        key = (run.config, _overrides_json(run.overrides))
+        sim = self._kept.pop(key, None)
+        if sim is None:
+            sim = Simulation(config, seed=run.seed)
+            self.built += 1
+        else:
+            sim.observers.clear()  # the last run's outcome and recorders
+            sim.reset(seed=run.seed)
+        self._kept[key] = sim
+        while len(self._kept) > self.size:
+            self._kept.popitem(last=False)
+        return sim
+
+    def clear(self) -> None:
+        """Forget every simulation (the next run of each builds one)."""
+        self._kept.clear()
+
+
+WARM = WarmSimulations()
+"""This process's warm simulations."""
+
+
+def _overrides_json(overrides: tuple[tuple[str, Any], ...]) -> str:
+    return json.dumps([list(pair) for pair in overrides])
+
+
 def build_config(path: str, overrides: tuple[tuple[str, Any], ...]) -> SimConfig:
     """The configuration at ``path`` with ``overrides`` applied, validated (``ConfigError``
     if the result is not a valid configuration, ``KeyError`` if an override has no place);
     cached per worker."""
-    return _build_config(path, json.dumps([list(pair) for pair in overrides]))
+    return _build_config(path, _overrides_json(overrides))
 
 
-def execute(run: RunSpec) -> RunResult:
-    """Carry out one run; whatever the controller does is recorded, never raised."""
+@dataclass(frozen=True)
+class _Extras:
+    """Where a run is recorded and filmed (None: it is not)."""
+
+    record: Path | None = None
+    video: Path | None = None
+
+
+def execute(run: RunSpec, *, video: bool = False) -> RunResult:
+    """Carry out one run; whatever the controller does is recorded, never raised. A run to
+    keep (:attr:`RunSpec.keep`) brings its folder's files back; with ``video``, the run is
+    filmed instead (``video.mp4``; a failure's run again, after the sweep)."""
     from simmer.errors import ConfigError
 
     start = time.perf_counter()
-    with _captured_output() as tail, _in_folder(run.folder):
+    files: dict[str, bytes] = {}
+    with (
+        _captured_output() as tail,
+        _in_folder(run.folder),
+        tempfile.TemporaryDirectory(prefix="simmer-run-") as scratch,
+    ):
         try:
             config = build_config(run.config, run.overrides)
         except (ConfigError, KeyError) as exc:
             return RunResult(
                 run.key(), "invalid", None, time.perf_counter() - start, None, str(exc)
             )
+        keeping = run.keep != "nothing" and not video
+        extras = _Extras(
+            record=Path(scratch, "run") if keeping else None,
+            video=Path(scratch, "video.mp4") if video else None,
+        )
+        sim: Simulation | None = None
         try:
+            sim = WARM.simulation(run, config)
+            if keeping:
+                _follow_trail(sim)
             if run.kind == "program":
-                status, outcome, exit_status = _run_program(run, config)
+                status, outcome, exit_status = _run_program(run, sim, extras)
             else:
-                status, outcome, exit_status = _run_policy(run, config)
+                status, outcome, exit_status = _run_policy(run, sim, extras)
         except Exception:  # the simulator itself failed: still a row, with why
             traceback.print_exc()
             status, outcome, exit_status = "error", None, None
+        success = succeeded(run.success, outcome)
+        if extras.video is not None and extras.video.exists():
+            files["video.mp4"] = extras.video.read_bytes()
+        if extras.record is not None and extras.record.is_dir():
+            if run.keep == "all" or not success:
+                files = {p.name: p.read_bytes() for p in sorted(extras.record.iterdir())}
+            if not success and outcome is not None and sim is not None:
+                files.update(_frames(sim, run.seed))
     printed = tail() if status != "ok" else ""  # why a run failed; a finished run's chatter is not
-    return RunResult(run.key(), status, outcome, time.perf_counter() - start, exit_status, printed)
+    elapsed = time.perf_counter() - start
+    return RunResult(run.key(), status, outcome, elapsed, exit_status, printed, success, files)
 
 
-def _run_program(run: RunSpec, config: SimConfig) -> tuple[str, dict[str, Any], int | None]:
+def film(run: RunSpec) -> RunResult:
+    """Carry out one run again with a video (:func:`execute` with ``video``)."""
+    return execute(run, video=True)
+
+
+def _headless_pygame() -> None:
+    """Let pygame draw without a display (a worker has none), and import without its banner
+    (which would land in the run's output)."""
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+
+
+def _follow_trail(sim: Simulation) -> None:
+    """Keep the path the robot drives, for a failure's last frame to show."""
+    _headless_pygame()
+    from simmer.ui.trail import Trail
+
+    sim.add_observer(Trail(sim.robot.pose))
+
+
+_CANVASES: OrderedDict[int, tuple[SimConfig, Any]] = OrderedDict()
+"""Off-screen renderers by configuration: a worker draws each maze's static layer once."""
+
+
+def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
+    """``last.png``, the simulation as the run left it, and ``first.png``, as it started
+    (after which ``sim`` is at its start again); none if they cannot be drawn."""
+    try:
+        _headless_pygame()
+        import pygame
+
+        from simmer.ui.maker import LocalControls, SnapshotMaker
+        from simmer.ui.offscreen import OffscreenRenderer
+        from simmer.ui.snapshot import StaticScene
+
+        key = id(sim.config)
+        kept = _CANVASES.pop(key, None) or (sim.config, OffscreenRenderer(StaticScene.of(sim)))
+        _CANVASES[key] = kept  # with its configuration, so that id is not reused while kept
+        while len(_CANVASES) > WARM.size:
+            _CANVASES.popitem(last=False)
+        canvas = kept[1]
+        width, height = canvas.surface.get_size()
+
+        def picture() -> bytes:
+            maker = SnapshotMaker(sim)  # the HUD shows the run's outcome, which observes sim
+            try:
+                canvas.invalidate()
+                canvas.draw(maker.snapshot(LocalControls(sim, speed=None)))
+            finally:
+                maker.close()
+            small = pygame.transform.smoothscale(
+                canvas.surface, (width // FRAME_SCALE, height // FRAME_SCALE)
+            )
+            data = io.BytesIO()
+            pygame.image.save(small, data, "png")
+            return data.getvalue()
+
+        last = picture()
+        sim.observers.clear()
+        sim.reset(seed=seed)
+        return {"first.png": picture(), "last.png": last}
+    except Exception:  # pictures are a help; the run's row stands without them
+        traceback.print_exc()
+        return {}
+
+
+def _run_program(
+    run: RunSpec, sim: Simulation, extras: _Extras
+) -> tuple[str, dict[str, Any], int | None]:
     """Serve the run headless on free ports and let the program drive it."""
     from simmer.serve import serve
-    from simmer.world import Simulation
 
+    if extras.video is not None:
+        _headless_pygame()
     served = serve(
-        Simulation(config, seed=run.seed),
+        sim,
         window=False,
         speed=None,
         seconds=run.seconds,
@@ -181,7 +376,11 @@ def _run_program(run: RunSpec, config: SimConfig) -> tuple[str, dict[str, Any], 
         program=run.controller,
         lockstep=True,
         timeout=run.wall_seconds,
+        record=extras.record,
+        video=extras.video,
     )
+    if served.ended_by == "quit":  # Ctrl-C or a signal stopped this worker: no result
+        raise KeyboardInterrupt
     outcome = served.outcome.report().as_dict()
     if served.ended_by == "program":
         status = "ok" if served.exit_status == 0 else "error"
@@ -189,25 +388,41 @@ def _run_program(run: RunSpec, config: SimConfig) -> tuple[str, dict[str, Any], 
     return {"seconds": "seconds", "timeout": "timeout"}.get(served.ended_by, "error"), outcome, None
 
 
-def _run_policy(run: RunSpec, config: SimConfig) -> tuple[str, dict[str, Any], int | None]:
+def _run_policy(
+    run: RunSpec, sim: Simulation, extras: _Extras
+) -> tuple[str, dict[str, Any], int | None]:
     """Call ``module:function`` with a client on an in-process lockstep link."""
     from simmer.client import Client
-    from simmer.world import Simulation
+    from simmer.record import RunRecorder, RunSetup
     from simmer.world.outcome import Outcome
 
-    sim = Simulation(config, seed=run.seed)
-    outcome = Outcome.attach(sim)
     policy = resolve_policy(run.controller, run.folder)
+    outcome = Outcome.attach(sim)
     link = _LimitedLink(sim, run.seconds)
+    recorder = None
+    if extras.record is not None:
+        setup = RunSetup("lockstep", None, link.inner.runner.link_delay, run.controller)
+        recorder = RunRecorder(sim, extras.record, setup, outcome)
+    filming = None
+    if extras.video is not None:
+        _headless_pygame()
+        from simmer.ui.video import VideoRecorder
+
+        filming = VideoRecorder(sim, extras.video)
     status = "ok"
-    with _wall_limit(run.wall_seconds):
-        try:
+    try:
+        with _wall_limit(run.wall_seconds):
             policy(Client(link, lockstep=True))
-        except LimitReached as limit:
-            status = limit.status
-        except Exception:
-            traceback.print_exc()
-            status = "error"
+    except LimitReached as limit:
+        status = limit.status
+    except Exception:
+        traceback.print_exc()
+        status = "error"
+    finally:
+        if filming is not None:
+            filming.close()
+        if recorder is not None:
+            recorder.close(ENDED_BY[status])
     return status, outcome.report().as_dict(), None
 
 
@@ -255,22 +470,44 @@ class _LimitedLink:
 
 @contextmanager
 def _wall_limit(seconds: float) -> Iterator[None]:
-    """Raise :class:`LimitReached` in a policy still running after ``seconds`` of wall time
-    (a Python loop is interrupted; where there is no SIGALRM, nothing is)."""
-    if not hasattr(signal, "setitimer"):
-        yield
+    """Raise :class:`LimitReached` (``timeout``) in a policy still running after ``seconds``
+    of wall time. In the main thread by SIGALRM, which interrupts a sleep too; in another
+    thread (a Dask worker runs tasks in one) as an exception sent to that thread, which a
+    Python loop gets at once and a blocking call when it returns. The caller catches it
+    outside the ``with``: the limit may pass as the policy returns."""
+    if threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer"):
+
+        def expired(_signum: int, _frame: FrameType | None) -> None:
+            raise WallLimitReached
+
+        previous = signal.signal(signal.SIGALRM, expired)
+        signal.setitimer(signal.ITIMER_REAL, seconds)
+        try:
+            yield
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
         return
+    target = threading.get_ident()
+    lock = threading.Lock()
+    running = True
 
-    def expired(_signum: int, _frame: FrameType | None) -> None:
-        raise LimitReached("timeout")
+    def expire() -> None:
+        with lock:
+            if running:
+                ctypes.pythonapi.PyThreadState_SetAsyncExc(
+                    ctypes.c_ulong(target), ctypes.py_object(WallLimitReached)
+                )
 
-    previous = signal.signal(signal.SIGALRM, expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    timer = threading.Timer(seconds, expire)
+    timer.daemon = True
+    timer.start()
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
+        with lock:
+            running = False
+        timer.cancel()
 
 
 @contextmanager

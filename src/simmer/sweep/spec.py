@@ -1,5 +1,5 @@
-"""The sweep file: what to run (a configuration, a controller, seeds, a grid of overrides),
-the limits, and what counts as success.
+"""The sweep file: what to run (a configuration, a controller, seeds, a grid and a random sample
+of overrides), the limits, what counts as success and what to keep.
 
 ```toml
 config = "config.py"                 # or a list of files: then a swept column `config`
@@ -8,56 +8,110 @@ seeds = 4                            # or a list: [1, 5, 9]
 seconds = 120                        # simulated-time limit per run (optional)
 wall_seconds = 60                    # wall-clock limit per run
 success = "reached and collisions == 0"
+keep = "failures"                    # run folders of: "nothing", "failures" or "all" runs
+videos = 3                           # and a video of each of the first 3 failures
+sample_seed = 0                      # the [sample]'s draws come from this seed
 
-[grid]
-"drives.w0.error.x" = [0.0, 0.1]
+[grid]                               # every combination of these values
+"drives.w0.error.y" = [0.0, 0.1]
+"sensors.*.error" = [0.0, 0.02]      # `*`: every table at that level (here: every sensor)
+
+[sample]                             # and, for each, `count` random draws of these
+count = 20
+"drives.r0.error.rotation" = {uniform = [0, 0.05]}   # or {normal = [mean, sd]}, {choice = [...]}
 ```
 
-Paths are relative to the sweep file, which is also the program's working directory.
+Paths are relative to the sweep file, which is also the program's working directory. The runs
+are the product of the configurations, the grid's combinations, the sample's draws and the
+seeds (in that order, the seed changing fastest); every grid combination gets the same draws.
+A normal draw outside a key's valid range makes an ``invalid`` run: use ``uniform`` for bounds.
+
+``keep`` (default ``"failures"``): whose run folders go in ``runs/``; a failure's has its first
+and last frame too (some 35 ms of drawing per failure: ``"nothing"`` for the fastest sweep of
+in-process policies). ``videos`` (default 0): how many failures, the first in the sweep's order,
+are run again and filmed after the sweep (a few seconds each).
 """
 
 from __future__ import annotations
 
-import ast
+import difflib
+import hashlib
 import itertools
 import math
-import operator
+import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
-from simmer.sweep.runs import ControllerKind, RunSpec
+import numpy as np
 
-DEFAULT_SUCCESS = "reached and collisions == 0"
+from simmer.sweep.runs import ControllerKind, Keep, RunSpec
+from simmer.sweep.success import (
+    DEFAULT_SUCCESS,
+    OUTCOME_FIELDS,
+    SweepError,
+    success_condition,
+)
+
+__all__ = [
+    "DEFAULT_SUCCESS",
+    "OUTCOME_FIELDS",
+    "Distribution",
+    "SweepError",
+    "SweepSpec",
+    "load_sweep",
+    "success_condition",
+    "sweep_from_dict",
+]
+
 DEFAULT_WALL_SECONDS = 60.0
-OUTCOME_FIELDS = (
-    "time",
-    "first_motion",
-    "reached",
-    "reached_at",
-    "task2_time",
-    "collisions",
-    "first_collision",
-    "blocked_steps",
-    "path_length",
-    "messages",
-    "commands",
-    "nan_replies",
-    "final_x",
-    "final_y",
-    "final_heading",
-)
-"""The outcome's fields as results.csv has them (the final pose in three columns); the names
-a success condition may use."""
 KNOWN_KEYS = frozenset(
-    {"config", "program", "policy", "seeds", "grid", "seconds", "wall_seconds", "success"}
+    {
+        "config",
+        "program",
+        "policy",
+        "seeds",
+        "grid",
+        "sample",
+        "sample_seed",
+        "seconds",
+        "wall_seconds",
+        "success",
+        "keep",
+        "videos",
+    }
 )
+KEEPS: tuple[Keep, ...] = get_args(Keep)
+DistributionKind = Literal["uniform", "normal", "choice"]
+DISTRIBUTIONS: dict[str, str] = {
+    "uniform": "{uniform = [low, high]}",
+    "normal": "{normal = [mean, standard deviation]}",
+    "choice": "{choice = [value, value, ...]}",
+}
+FOLDER_NAME = 120
+"""Characters a run folder's name may have before it is named by the run's key instead."""
 
 
-class SweepError(ValueError):
-    """The sweep file is not a sweep SimMeR can run (the message says why)."""
+@dataclass(frozen=True)
+class Distribution:
+    """Where a sampled key's values come from: ``uniform`` (low, high), ``normal`` (mean,
+    standard deviation) or ``choice`` (the values, equally likely)."""
+
+    kind: DistributionKind
+    values: tuple[Any, ...]
+
+    def draw(self, rng: np.random.Generator) -> Any:
+        """One value (a Python float, or one of the choices as written)."""
+        if self.kind == "uniform":
+            return float(rng.uniform(*self.values))
+        if self.kind == "normal":
+            return float(rng.normal(*self.values))
+        return self.values[int(rng.integers(len(self.values)))]
+
+    def __str__(self) -> str:
+        return f"{self.kind}({', '.join(map(str, self.values))})"
 
 
 @dataclass(frozen=True)
@@ -73,37 +127,97 @@ class SweepSpec:
     seconds: float | None = None
     wall_seconds: float = DEFAULT_WALL_SECONDS
     success: str = DEFAULT_SUCCESS
+    sample: tuple[tuple[str, Distribution], ...] = ()
+    sample_count: int = 0
+    sample_seed: int = 0
+    keep: Keep = "failures"
+    videos: int = 0
 
     @property
-    def columns(self) -> tuple[str, ...]:
-        """The swept columns of results.csv: ``config`` if there are several, then the grid's
-        keys, named as in the sweep file."""
+    def setting_columns(self) -> tuple[str, ...]:
+        """The columns that make a setting (what the summary compares): ``config`` if there
+        are several, then the grid's keys, named as in the sweep file."""
         swept = tuple(key for key, _ in self.grid)
         return ("config", *swept) if len(self.configs) > 1 else swept
 
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The swept columns of results.csv: the setting's, then with a sample, ``sample``
+        (the draw's number) and the sampled keys."""
+        sampled = ("sample", *(key for key, _ in self.sample)) if self.sample else ()
+        return (*self.setting_columns, *sampled)
+
+    def draws(self) -> list[tuple[Any, ...]]:
+        """The sample's draws: one tuple of values (in the sampled keys' order) per draw.
+        Each key's values come from a stream of their own (from ``sample_seed`` and the key's
+        name), so adding a key or raising ``count`` leaves the other draws as they were."""
+        columns = []
+        for key, distribution in self.sample:
+            rng = _stream(self.sample_seed, key)
+            columns.append([distribution.draw(rng) for _ in range(self.sample_count)])
+        return list(zip(*columns, strict=True))
+
     def runs(self) -> list[RunSpec]:
         """Every run: each configuration, each combination of the grid's values (the first key
-        slowest), each seed."""
-        keys = [key for key, _ in self.grid]
+        slowest), each draw of the sample, each seed."""
+        keys = [key for key, _ in self.grid] + [key for key, _ in self.sample]
+        draws: list[tuple[int | None, tuple[Any, ...]]] = (
+            list(enumerate(self.draws())) if self.sample else [(None, ())]
+        )
         runs = []
         for config in self.configs:
             for values in itertools.product(*(values for _, values in self.grid)):
-                setting = ((config.name,) if len(self.configs) > 1 else ()) + tuple(values)
-                for seed in self.seeds:
-                    runs.append(
-                        RunSpec(
-                            config=str(config),
-                            overrides=tuple(zip(keys, values, strict=True)),
-                            seed=seed,
-                            kind=self.kind,
-                            controller=self.controller,
-                            folder=str(self.folder),
-                            seconds=self.seconds,
-                            wall_seconds=self.wall_seconds,
-                            setting=setting,
+                named = (config.name,) if len(self.configs) > 1 else ()
+                for number, drawn in draws:
+                    setting = (*named, *values, *((number, *drawn) if self.sample else ()))
+                    for seed in self.seeds:
+                        runs.append(
+                            RunSpec(
+                                config=str(config),
+                                overrides=tuple(zip(keys, (*values, *drawn), strict=True)),
+                                seed=seed,
+                                kind=self.kind,
+                                controller=self.controller,
+                                folder=str(self.folder),
+                                seconds=self.seconds,
+                                wall_seconds=self.wall_seconds,
+                                setting=setting,
+                                sample=number,
+                                success=self.success,
+                                keep=self.keep,
+                            )
                         )
-                    )
         return runs
+
+    def folder_names(self, runs: list[RunSpec]) -> dict[str, str]:
+        """The name of each run's folder under ``runs/``, by run key: the setting and seed
+        (``drives.w0.error.y=0.05_seed3``), or the run's key and seed if those are too long
+        or two runs' names would be the same."""
+        sampled = {key for key, _ in self.sample}
+        names = {run.key(): _folder_name(self.columns, sampled, run) for run in runs}
+        too_long = any(len(name) > FOLDER_NAME for name in names.values())
+        if too_long or len(set(names.values())) < len(names):
+            return {run.key(): f"{run.key()}_seed{run.seed}" for run in runs}
+        return names
+
+
+def _folder_name(columns: tuple[str, ...], sampled: set[str], run: RunSpec) -> str:
+    """``key=value`` for each grid key, ``sampleN`` for a draw (its values are in the
+    table), then ``seedN``; characters other than letters, digits and ``._=+-`` made ``-``."""
+    parts = [
+        f"sample{value}" if column == "sample" else f"{column.replace('*', 'all')}={value}"
+        for column, value in zip(columns, run.setting, strict=True)
+        if column not in sampled
+    ]
+    return re.sub(r"[^A-Za-z0-9._=+-]", "-", "_".join([*parts, f"seed{run.seed}"]))
+
+
+def _stream(seed: int, key: str) -> np.random.Generator:
+    """The random stream of one sampled key (as :meth:`Simulation.stream` makes one per
+    source of noise)."""
+    digest = hashlib.blake2b(key.encode("utf-8"), digest_size=8).digest()
+    spawn = (int.from_bytes(digest, "little"),)
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=spawn))
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -122,8 +236,10 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     """A sweep from the sweep file's data; relative paths are from ``folder``."""
     unknown = sorted(set(data) - KNOWN_KEYS)
     if unknown:
+        hints = [_did_you_mean(key, KNOWN_KEYS) for key in unknown]
         raise SweepError(
-            f"unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(KNOWN_KEYS))}"
+            f"unknown key(s) {', '.join(unknown)}{''.join(hints)}; "
+            f"known: {', '.join(sorted(KNOWN_KEYS))}"
         )
     configs = data.get("config")
     if isinstance(configs, str):
@@ -134,6 +250,8 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     for config in paths:
         if not config.is_file():
             raise SweepError(f"config: no such file {config}")
+    if len({config.name for config in paths}) < len(paths):
+        raise SweepError("config: each file once, with different names (they name the column)")
     if ("program" in data) == ("policy" in data):
         raise SweepError(
             'name one controller: program = "python my_robot.py" or policy = "module:function"'
@@ -144,17 +262,42 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
         raise SweepError(f"{kind}: a non-empty string")
     if kind == "policy" and not _is_target(controller):
         raise SweepError(f'policy: "module:function", not {controller!r}')
+    grid = _grid(data.get("grid", {}))
+    count, sample = _sample(data.get("sample", {}), {key for key, _ in grid})
+    if "sample_seed" in data and not sample:
+        raise SweepError("sample_seed: seeds the [sample] table's draws, and there is none")
+    keep = data.get("keep", "failures")
+    if keep not in KEEPS:
+        raise SweepError(
+            f"keep: one of {', '.join(map(repr, KEEPS))} (the runs whose folders are kept), "
+            f"not {keep!r}{_did_you_mean(str(keep), KEEPS)}"
+        )
+    videos = _count(data, "videos", 0)
+    if videos and keep == "nothing":
+        raise SweepError(
+            'videos: a video goes in its run\'s folder; keep = "failures" (or "all") with it'
+        )
     return SweepSpec(
         folder=folder,
         configs=paths,
         kind=kind,
         controller=controller,
         seeds=_seeds(data.get("seeds", 1)),
-        grid=_grid(data.get("grid", {})),
+        grid=grid,
         seconds=_limit(data, "seconds", None),
         wall_seconds=_limit(data, "wall_seconds", DEFAULT_WALL_SECONDS) or DEFAULT_WALL_SECONDS,
         success=_checked_success(data.get("success", DEFAULT_SUCCESS)),
+        sample=sample,
+        sample_count=count,
+        sample_seed=_count(data, "sample_seed", 0),
+        keep=keep,
+        videos=videos,
     )
+
+
+def _did_you_mean(word: str, choices: Any) -> str:
+    close = difflib.get_close_matches(word, sorted(choices), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _is_target(text: str) -> bool:
@@ -163,18 +306,49 @@ def _is_target(text: str) -> bool:
     return bool(colon) and all(part.isidentifier() for part in parts)
 
 
+def _is_count(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _count(data: Mapping[str, Any], name: str, default: int) -> int:
+    value = data.get(name, default)
+    if not _is_count(value) or value < 0:
+        raise SweepError(f"{name}: a whole number, 0 or more, not {value!r}")
+    return int(value)
+
+
 def _seeds(value: Any) -> tuple[int, ...]:
-    if isinstance(value, int) and not isinstance(value, bool) and value > 0:
+    if _is_count(value) and value > 0:
         return tuple(range(value))
     if (
         isinstance(value, list)
         and value
-        and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in value)
+        and all(_is_count(s) and s >= 0 for s in value)
         and len(set(value)) == len(value)
     ):
         return tuple(value)
     raise SweepError(
         f"seeds: a count (more than 0) or a list of distinct seeds (0 or more), not {value!r}"
+    )
+
+
+def _dotted(table: Mapping[str, Any], leaf: Callable[[Any], bool]) -> list[tuple[str, Any]]:
+    """A table's entries by dotted key, whether the file quoted the keys
+    (``"drives.w0.error.y" = ...``) or not (``drives.w0.error.y = ...`` makes nested tables):
+    nested tables are followed down to the first value that is a ``leaf``."""
+    entries = []
+    for key, value in table.items():
+        if isinstance(value, dict) and value and not leaf(value):
+            entries += [(f"{key}.{inner}", v) for inner, v in _dotted(value, leaf)]
+        else:
+            entries.append((key, value))
+    return entries
+
+
+def _is_distribution(value: Any) -> bool:
+    """A table that names a distribution, or tries to (no table in it)."""
+    return bool(set(value) & set(DISTRIBUTIONS)) or not any(
+        isinstance(v, dict) for v in value.values()
     )
 
 
@@ -184,11 +358,67 @@ def _grid(value: Any) -> tuple[tuple[str, tuple[Any, ...]], ...]:
             '[grid]: a table of dotted keys and lists ("drives.w0.error.x" = [0, 0.1])'
         )
     grid = []
-    for key, values in value.items():
+    for key, values in _dotted(value, lambda _table: False):
         if not isinstance(values, list) or not values:
             raise SweepError(f"[grid] {key}: a non-empty list of values, not {values!r}")
+        seen: list[Any] = []
+        for item in values:
+            if item in seen:
+                raise SweepError(f"[grid] {key}: {item!r} is listed twice")
+            seen.append(item)
         grid.append((key, tuple(values)))
     return tuple(grid)
+
+
+def _sample(value: Any, grid: set[str]) -> tuple[int, tuple[tuple[str, Distribution], ...]]:
+    """The [sample] table: how many draws, and each key's distribution."""
+    example = '[sample]: count = 20, then dotted keys with distributions ("drives.w0.error.y" = '
+    if not isinstance(value, dict):
+        raise SweepError(example + "{uniform = [0, 0.1]})")
+    if not value:
+        return 0, ()
+    entries = dict(value)
+    count = entries.pop("count", None)
+    if not _is_count(count) or count < 1:
+        raise SweepError(f"[sample] count: how many draws (1 or more), not {count!r}")
+    sample = tuple(
+        (key, _distribution(key, spec, grid)) for key, spec in _dotted(entries, _is_distribution)
+    )
+    if not sample:
+        raise SweepError(example + "{uniform = [0, 0.1]}); it names none")
+    return count, sample
+
+
+def _distribution(key: str, spec: Any, grid: set[str]) -> Distribution:
+    """One sampled key's distribution, checked."""
+    forms = ", ".join(DISTRIBUTIONS.values())
+    where = f"[sample] {key}"
+    if key in grid:
+        raise SweepError(f"{where}: also in [grid]; sweep a key in one of them")
+    if not isinstance(spec, dict) or len(spec) != 1:
+        raise SweepError(f"{where}: one distribution ({forms}), not {spec!r}")
+    ((kind, values),) = spec.items()
+    if kind not in DISTRIBUTIONS:
+        raise SweepError(
+            f"{where}: no distribution {kind!r}{_did_you_mean(kind, DISTRIBUTIONS)}; one of {forms}"
+        )
+    if kind == "choice":
+        if not isinstance(values, list) or not values:
+            raise SweepError(f"{where}: {DISTRIBUTIONS[kind]}, a non-empty list, not {values!r}")
+        return Distribution("choice", tuple(values))
+    if (
+        not isinstance(values, list)
+        or len(values) != 2
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+        or not all(math.isfinite(v) for v in values)
+    ):
+        raise SweepError(f"{where}: {DISTRIBUTIONS[kind]}, two numbers, not {values!r}")
+    first, second = (float(v) for v in values)
+    if kind == "uniform" and first > second:
+        raise SweepError(f"{where}: uniform = [low, high] with low <= high, not {values!r}")
+    if kind == "normal" and second < 0:
+        raise SweepError(f"{where}: normal's standard deviation is 0 or more, not {second!r}")
+    return Distribution(kind, (first, second))
 
 
 def _limit(data: Mapping[str, Any], name: str, default: float | None) -> float | None:
@@ -205,95 +435,3 @@ def _checked_success(text: Any) -> str:
         raise SweepError(f"success: an expression such as {DEFAULT_SUCCESS!r}")
     success_condition(text)
     return text
-
-
-# ----------------------------------------------------------------------------- success
-
-_COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], bool]] = {
-    ast.Eq: operator.eq,
-    ast.NotEq: operator.ne,
-    ast.Lt: operator.lt,
-    ast.LtE: operator.le,
-    ast.Gt: operator.gt,
-    ast.GtE: operator.ge,
-}
-_ARITHMETIC: dict[type[ast.operator], Callable[[Any, Any], Any]] = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-}
-
-
-def success_condition(text: str) -> Callable[[Mapping[str, Any]], bool]:
-    """Compile a success condition over the outcome's fields (:data:`OUTCOME_FIELDS`):
-    names, numbers, ``true``/``false``, + - * /, comparisons, ``and``, ``or``, ``not`` and
-    parentheses; nothing else is allowed (it is parsed, never run by Python). A comparison
-    with a field that has no value (``task2_time`` when the block was not reached) is false.
-    Raises :class:`SweepError` naming what is not allowed."""
-    try:
-        tree = ast.parse(text.strip(), mode="eval")
-    except SyntaxError:
-        raise SweepError(f"success: cannot read {text!r}") from None
-    _check(tree.body, text)
-    return lambda fields: bool(_evaluate(tree.body, fields))
-
-
-def _check(node: ast.expr, text: str) -> None:
-    if isinstance(node, ast.Name):
-        if node.id not in OUTCOME_FIELDS and node.id not in ("true", "false"):
-            raise SweepError(f"success: {node.id!r} is not one of {', '.join(OUTCOME_FIELDS)}")
-        return
-    if isinstance(node, ast.Constant):
-        if isinstance(node.value, int | float):  # bool included
-            return
-    elif isinstance(node, ast.BoolOp):
-        for value in node.values:
-            _check(value, text)
-        return
-    elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not | ast.USub):
-        _check(node.operand, text)
-        return
-    elif isinstance(node, ast.Compare) and all(type(op) in _COMPARE for op in node.ops):
-        for value in (node.left, *node.comparators):
-            _check(value, text)
-        return
-    elif isinstance(node, ast.BinOp) and type(node.op) in _ARITHMETIC:
-        _check(node.left, text)
-        _check(node.right, text)
-        return
-    shown = ast.get_source_segment(text.strip(), node) or type(node).__name__
-    raise SweepError(
-        f"success: {shown!r} is not allowed (fields, numbers, comparisons, and/or/not)"
-    )
-
-
-def _evaluate(node: ast.expr, fields: Mapping[str, Any]) -> Any:
-    if isinstance(node, ast.Name):
-        return {"true": True, "false": False}.get(node.id, fields.get(node.id))
-    if isinstance(node, ast.Constant):
-        return node.value
-    if isinstance(node, ast.BoolOp):
-        values = (_evaluate(value, fields) for value in node.values)
-        return all(values) if isinstance(node.op, ast.And) else any(values)
-    if isinstance(node, ast.UnaryOp):
-        operand = _evaluate(node.operand, fields)
-        if isinstance(node.op, ast.Not):
-            return not operand
-        return None if operand is None else -operand
-    if isinstance(node, ast.Compare):
-        left = _evaluate(node.left, fields)
-        for op, right_node in zip(node.ops, node.comparators, strict=True):
-            right = _evaluate(right_node, fields)
-            if left is None or right is None or not _COMPARE[type(op)](left, right):
-                return False
-            left = right
-        return True
-    assert isinstance(node, ast.BinOp)
-    left, right = _evaluate(node.left, fields), _evaluate(node.right, fields)
-    if left is None or right is None:
-        return None
-    try:
-        return _ARITHMETIC[type(node.op)](left, right)
-    except ZeroDivisionError:
-        return None

@@ -70,7 +70,6 @@ class Simulation:
         self.observers: list[Observer] = []
         self._simulate_list = settings.simulate_list
         self._lenient = settings.lenient_commands
-        self._lenient_warned: set[tuple[str, str]] = set()
         self._build()
 
     @classmethod
@@ -114,6 +113,7 @@ class Simulation:
         self.blocked_steps = 0
         self._was_blocked = False
         self.manual_keys: frozenset[str] = frozenset()
+        self._lenient_warned: set[tuple[str, str]] = set()
 
     def _draw_bias(self, drive: Drive) -> Axes:
         """``rand_bias``: x, y ~ N(0, linear); rotation ~ N(0, rotational) for a translating
@@ -439,9 +439,15 @@ class Simulation:
 
     # ----------------------------------------------------------------- lifecycle
 
-    def reset(self) -> None:
-        """Put robot, block, devices, time and the random generator back to the start."""
+    def reset(self, seed: int | None = None) -> None:
+        """Put robot, block, devices, time and the random generator back to the start, as a
+        new simulation of this configuration starts (observers stay). With ``seed``, the
+        noise comes from that seed from now on: a sweep's worker runs seed after seed on one
+        simulation this way, without building the maze and devices' settings again. (The
+        reset's event does not carry the seed: change it before recording, not during.)"""
         time, step = self._time, self.frame  # the event says when it was asked for
+        if seed is not None:
+            self.seed = seed
         self._build()
         if self.observers:
             self.emit(ResetEvent(time, step))

@@ -1,0 +1,171 @@
+"""What counts as success, and how a run that did not succeed failed.
+
+A success condition is a small expression over the outcome's fields
+(:data:`OUTCOME_FIELDS`), parsed and evaluated here, never run by Python. A run that did not
+succeed is put in one of :data:`FAILURES` by :func:`failure_kind`, for the ``failure`` column
+of results.csv and the summary's gallery.
+"""
+
+from __future__ import annotations
+
+import ast
+import operator
+from collections.abc import Callable, Mapping
+from functools import lru_cache
+from typing import Any
+
+DEFAULT_SUCCESS = "reached and collisions == 0"
+OUTCOME_FIELDS = (
+    "time",
+    "first_motion",
+    "reached",
+    "reached_at",
+    "task2_time",
+    "collisions",
+    "first_collision",
+    "blocked_steps",
+    "path_length",
+    "messages",
+    "commands",
+    "nan_replies",
+    "final_x",
+    "final_y",
+    "final_heading",
+)
+"""The outcome's fields as results.csv has them (the final pose in three columns); the names
+a success condition may use."""
+FAILURES = {
+    "collision": "collided with a wall or the block",
+    "timeout": "stopped by the simulated-time or the wall-clock limit",
+    "stopped-short": "finished without reaching the block",
+    "condition": "finished at the block, but the success condition was false",
+    "crashed": "the controller failed, the worker died or the configuration was invalid",
+}
+"""How a run can fail (the ``failure`` column), in the order the summary shows them."""
+CRASHED_STATUSES = frozenset({"error", "crashed", "invalid"})
+
+
+class SweepError(ValueError):
+    """The sweep file is not a sweep SimMeR can run (the message says why)."""
+
+
+def flat_outcome(outcome: Mapping[str, Any] | None) -> dict[str, Any]:
+    """An outcome's fields as the table has them (the final pose in three columns)."""
+    if outcome is None:
+        return {}
+    fields = {k: v for k, v in outcome.items() if k != "final_pose"}
+    fields["final_x"], fields["final_y"], fields["final_heading"] = outcome["final_pose"]
+    return fields
+
+
+def failure_kind(status: str, fields: Mapping[str, Any], success: bool) -> str:
+    """How a run failed (a key of :data:`FAILURES`), or "" if it succeeded. The controller's
+    own failure comes first, then a collision (the most telling cause, even if a limit ended
+    the run later), then a limit, then where the robot stopped."""
+    if success:
+        return ""
+    if status in CRASHED_STATUSES or not fields:
+        return "crashed"
+    if fields.get("collisions"):
+        return "collision"
+    if status in ("timeout", "seconds"):
+        return "timeout"
+    return "condition" if fields.get("reached") else "stopped-short"
+
+
+# ----------------------------------------------------------------------------- conditions
+
+_COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], bool]] = {
+    ast.Eq: operator.eq,
+    ast.NotEq: operator.ne,
+    ast.Lt: operator.lt,
+    ast.LtE: operator.le,
+    ast.Gt: operator.gt,
+    ast.GtE: operator.ge,
+}
+_ARITHMETIC: dict[type[ast.operator], Callable[[Any, Any], Any]] = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+}
+
+
+@lru_cache(maxsize=16)
+def success_condition(text: str) -> Callable[[Mapping[str, Any]], bool]:
+    """Compile a success condition over the outcome's fields (:data:`OUTCOME_FIELDS`):
+    names, numbers, ``true``/``false``, + - * /, comparisons, ``and``, ``or``, ``not`` and
+    parentheses; nothing else is allowed (it is parsed, never run by Python). A comparison
+    with a field that has no value (``task2_time`` when the block was not reached) is false.
+    Raises :class:`SweepError` naming what is not allowed; cached (a worker checks each run)."""
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError:
+        raise SweepError(f"success: cannot read {text!r}") from None
+    _check(tree.body, text)
+    return lambda fields: bool(_evaluate(tree.body, fields))
+
+
+def succeeded(condition: str, outcome: Mapping[str, Any] | None) -> bool:
+    """Whether a run with ``outcome`` (None: the run had none) meets ``condition``."""
+    return outcome is not None and success_condition(condition)(flat_outcome(outcome))
+
+
+def _check(node: ast.expr, text: str) -> None:
+    if isinstance(node, ast.Name):
+        if node.id not in OUTCOME_FIELDS and node.id not in ("true", "false"):
+            raise SweepError(f"success: {node.id!r} is not one of {', '.join(OUTCOME_FIELDS)}")
+        return
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, int | float):  # bool included
+            return
+    elif isinstance(node, ast.BoolOp):
+        for value in node.values:
+            _check(value, text)
+        return
+    elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not | ast.USub):
+        _check(node.operand, text)
+        return
+    elif isinstance(node, ast.Compare) and all(type(op) in _COMPARE for op in node.ops):
+        for value in (node.left, *node.comparators):
+            _check(value, text)
+        return
+    elif isinstance(node, ast.BinOp) and type(node.op) in _ARITHMETIC:
+        _check(node.left, text)
+        _check(node.right, text)
+        return
+    shown = ast.get_source_segment(text.strip(), node) or type(node).__name__
+    raise SweepError(
+        f"success: {shown!r} is not allowed (fields, numbers, comparisons, and/or/not)"
+    )
+
+
+def _evaluate(node: ast.expr, fields: Mapping[str, Any]) -> Any:
+    if isinstance(node, ast.Name):
+        return {"true": True, "false": False}.get(node.id, fields.get(node.id))
+    if isinstance(node, ast.Constant):
+        return node.value
+    if isinstance(node, ast.BoolOp):
+        values = (_evaluate(value, fields) for value in node.values)
+        return all(values) if isinstance(node.op, ast.And) else any(values)
+    if isinstance(node, ast.UnaryOp):
+        operand = _evaluate(node.operand, fields)
+        if isinstance(node.op, ast.Not):
+            return not operand
+        return None if operand is None else -operand
+    if isinstance(node, ast.Compare):
+        left = _evaluate(node.left, fields)
+        for op, right_node in zip(node.ops, node.comparators, strict=True):
+            right = _evaluate(right_node, fields)
+            if left is None or right is None or not _COMPARE[type(op)](left, right):
+                return False
+            left = right
+        return True
+    assert isinstance(node, ast.BinOp)
+    left, right = _evaluate(node.left, fields), _evaluate(node.right, fields)
+    if left is None or right is None:
+        return None
+    try:
+        return _ARITHMETIC[type(node.op)](left, right)
+    except ZeroDivisionError:
+        return None
