@@ -197,6 +197,8 @@ class EventLog:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self._file = self.path.open("wb", buffering=0)
+        self._send = self._file.write
+        self._closed = False
         self._last_step: StepEvent | None = None
         self.written = 0
         """Events written so far."""
@@ -206,24 +208,24 @@ class EventLog:
         if type(event) is StepEvent:
             self._last_step = event
             return
-        if self._file.closed:  # a simulation thread that outlived the run
+        if self._closed:  # a simulation thread that outlived the run
             return
         self._last_step = None
-        self._write(event)
+        self._write(event_line(event).encode("utf-8"))
 
-    def _write(self, event: Event) -> None:
+    def _write(self, line: bytes) -> None:
         """One line, in one system call (more only if the system writes part of it)."""
-        line = event_line(event).encode("utf-8")
-        done = self._file.write(line) or 0
+        done = self._send(line) or 0
         while done < len(line):
-            done += self._file.write(line[done:]) or 0
+            done += self._send(line[done:]) or 0
         self.written += 1
 
     def close(self) -> None:
         """Write the run's last step if nothing came after it, and close the file (again:
         nothing)."""
-        if self._file.closed:
+        if self._closed:
             return
+        self._closed = True
         if self._last_step is not None:
-            self._write(self._last_step)
+            self._write(event_line(self._last_step).encode("utf-8"))
         self._file.close()

@@ -15,9 +15,10 @@ two rows at the lab's speeds. A row is written at the first step of every 1/30 s
 time (every second step at 60 steps a second; every step below 30), plus the start and the
 last step. The time restarts at 0 after a reset (the robot is back at its start).
 
-The file is flushed at most once a wall-clock second (a flush per row would cost a system call
-each), so after ``kill -9`` its last second may be missing; ``events.jsonl`` has every event,
-and a replay (:func:`simmer.record.retrace`) writes the trace again.
+Rows are written and the file flushed once a wall-clock second, or every 1,024 rows (a write
+per row would cost more than making it), so after ``kill -9`` its last second may be missing;
+``events.jsonl`` has every event, and a replay (:func:`simmer.record.retrace`) writes the
+trace again.
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ NUMBER = "%.10g"
 """How a number is written (``nan`` and ``inf`` as themselves)."""
 ROW = f"{NUMBER},%d,{NUMBER},{NUMBER},{NUMBER},%d"
 """A row up to its sensors' columns."""
+PENDING_ROWS = 1024
+"""Rows held before they are written, at most (a fast headless run makes thousands a second)."""
 MAX_MESSAGES = 1024
 """Distinct messages whose sensor columns are remembered (a program repeats a few)."""
 
@@ -61,6 +64,9 @@ class TraceWriter:
         self._file.write(",".join(trace_columns(sensors)) + "\n")
         self._column = {sensor: i for i, sensor in enumerate(sensors)}
         self._readings: list[float | None] = [None] * len(sensors)
+        self._rows: list[str] = []
+        """Rows (each in two pieces) made since the last flush: written together, once a
+        wall-clock second (a write per row costs more than making it)."""
         self._readings_text = "," * len(sensors) + "\n"
         """The end of a row: the readings, written again only when one changes."""
         self._changed = False
@@ -121,17 +127,24 @@ class TraceWriter:
             return
         if self._changed:
             self._changed = False
-            texts = ["" if value is None else NUMBER % value for value in self._readings]
-            self._readings_text = "".join("," + text for text in texts) + "\n"
-        row = ROW % (time_s, step, *pose, self._collisions) + self._readings_text
-        self._file.write(row)  # one write: a Ctrl-C cannot leave half a row
+            self._readings_text = (
+                "".join(["," if v is None else "," + NUMBER % v for v in self._readings]) + "\n"
+            )
+        self._rows.append(ROW % (time_s, step, pose.x, pose.y, pose.heading, self._collisions))
+        self._rows.append(self._readings_text)
         # the first step of the next 1/30 s: one whose step x rate reaches the next whole number
         tick = math.floor(step * self._rows_per_step + 1e-6)
         self._next_row = math.ceil((tick + 1 - 1e-6) / self._rows_per_step)
         self.rows += 1
-        if time.monotonic() >= self._flush_at:
-            self._file.flush()
-            self._flush_at = time.monotonic() + FLUSH_INTERVAL
+        if len(self._rows) >= PENDING_ROWS * 2 or time.monotonic() >= self._flush_at:
+            self._flush()
+
+    def _flush(self) -> None:
+        """Write the rows made since the last flush, in one write, and flush the file."""
+        self._file.write("".join(self._rows))
+        self._file.flush()
+        self._rows.clear()
+        self._flush_at = time.monotonic() + FLUSH_INTERVAL
 
     def close(self) -> None:
         """Write the last step's row if it has none yet, and close the file (again: nothing)."""
@@ -140,4 +153,5 @@ class TraceWriter:
         if self._last is not None:
             self._row(self._last.time, self._last.step, self._last.pose)
         self._closed = True
+        self._flush()
         self._file.close()
