@@ -294,3 +294,26 @@ def test_hud_image_after_reaching_the_block(tmp_path: Path) -> None:
     assert last - first == pytest.approx(font.size(f"{outcome.path_length:.1f} in")[0], abs=4)
     window.close()
     bridge.close()
+
+
+def test_a_snapshot_maker_shares_the_observers_a_simulation_has_already() -> None:
+    """A frame drawn after a run (a sweep's last frame) shows the run's own last commands,
+    outcome and trail, not empty ones of its own."""
+    from simmer.ui.hud import CommandLog
+    from simmer.ui.maker import LocalControls, SnapshotMaker
+    from simmer.ui.trail import Trail
+
+    sim = Simulation.from_config()
+    log, trail = CommandLog(), Trail(sim.robot.pose)
+    sim.add_observer(log)
+    sim.add_observer(trail)
+    sim.command("u0")
+    maker = SnapshotMaker(sim)
+    assert maker.commands is log
+    assert maker.trail is trail
+    assert [entry.message for entry in maker.snapshot(LocalControls(sim)).commands] == ["u0"]
+    maker.close()
+    assert log in sim.observers  # what it did not add, it does not take away
+    fresh = SnapshotMaker(Simulation.from_config())
+    assert fresh.commands is not log
+    fresh.close()

@@ -269,7 +269,7 @@ def execute(run: RunSpec, *, video: bool = False) -> RunResult:
         try:
             sim = WARM.simulation(run, config)
             if keeping:
-                _follow_trail(sim)
+                _follow_for_frames(sim)
             if run.kind == "program":
                 status, outcome, exit_status = _run_program(run, sim, extras)
             else:
@@ -302,12 +302,15 @@ def _headless_pygame() -> None:
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 
-def _follow_trail(sim: Simulation) -> None:
-    """Keep the path the robot drives, for a failure's last frame to show."""
+def _follow_for_frames(sim: Simulation) -> None:
+    """Keep the path the robot drives and the last commands, for a failure's last frame to
+    show."""
     _headless_pygame()
+    from simmer.ui.hud import CommandLog
     from simmer.ui.trail import Trail
 
     sim.add_observer(Trail(sim.robot.pose))
+    sim.add_observer(CommandLog())
 
 
 _CANVASES: OrderedDict[int, tuple[SimConfig, Any]] = OrderedDict()

@@ -54,7 +54,8 @@ class LocalControls:
 
 class SnapshotMaker:
     """Builds :class:`Snapshot` values of one simulation, with what the HUD shows besides it:
-    the run's outcome, the last commands and the trail (observers it adds to ``sim``). The
+    the run's outcome, the last commands and the trail (observers it adds to ``sim`` unless
+    ``sim`` has them already). The
     window's :class:`~simmer.ui.bridge.Bridge` and the video
     (:class:`~simmer.ui.video.VideoRecorder`) each have one.
 
@@ -79,8 +80,12 @@ class SnapshotMaker:
         self.trail = trail
         """The path driven so far: shared like :attr:`outcome` (a video started from the window
         shows the window's trail)."""
-        self.commands = CommandLog()
-        self._attached.append(self.commands)
+        commands = next((o for o in sim.observers if isinstance(o, CommandLog)), None)
+        if commands is None:
+            commands = CommandLog()
+            self._attached.append(commands)
+        self.commands = commands
+        """The last commands: shared too (a frame drawn after the run shows its last ones)."""
         for observer in self._attached:
             sim.add_observer(observer)
         self._robot = sim.robot
