@@ -486,6 +486,9 @@ def test_a_crashing_program_is_recorded_with_its_stderr(tmp_path: Path) -> None:
     assert all("Traceback: it went wrong here" in row["detail"] for row in rows)
     report = (tmp_path / "out" / rows[0]["folder"] / "report.md").read_text(encoding="utf-8")
     assert "the control program exited with status 3" in report
+    folder = tmp_path / "out" / rows[0]["folder"]
+    assert report.startswith(f"# SimMeR run: {folder.name}\n")  # not the worker's scratch name
+    assert f"simmer plot {folder}`" in report
     summary = (tmp_path / "out" / "summary.md").read_text(encoding="utf-8")
     assert "failed (exit status 3)" in summary
     assert "it went wrong here" in summary

@@ -104,13 +104,17 @@ def row(run: RunSpec, result: RunResult, folder: str = "") -> list[str]:
 
 def keep_files(folder: Path, name: str, files: Mapping[str, bytes]) -> str:
     """Write a run's files into ``folder``/runs/``name`` (replacing what a stopped sweep left
-    there); its path relative to ``folder``."""
+    there), its report.md written again for its place; its path relative to ``folder``."""
     target = folder / RUNS / name
     if target.exists():
         shutil.rmtree(target)
     target.mkdir(parents=True)
     for file, data in files.items():
         (target / file).write_bytes(data)
+    if "report.json" in files and "manifest.json" in files:
+        from simmer.record.runfolder import write_report_md
+
+        write_report_md(target)  # named after its folder here, not the worker's scratch one
     return f"{RUNS}/{name}"
 
 
