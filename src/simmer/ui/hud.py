@@ -19,6 +19,7 @@ from simmer.ui.scene import PANEL_HEIGHT, TRAIL_COLOR, tint
 from simmer.ui.snapshot import HasScene, Snapshot
 from simmer.world.events import CommandEvent, Event
 from simmer.world.outcome import OutcomeReport
+from simmer.world.replay import same_replies
 from simmer.world.simulation import MANUAL_KEYS
 
 KEY_LAYOUT = (("q", "w", "e"), ("a", "s", "d"))
@@ -76,7 +77,11 @@ class CommandLog:
         if not isinstance(event, CommandEvent):
             return
         last = self.entries[-1] if self.entries else None
-        if last is None or last.message != event.message or not _same(last.replies, event.replies):
+        if (
+            last is None
+            or last.message != event.message
+            or not same_replies(last.replies, event.replies)
+        ):
             self.entries.append(event)
             return
         count = last.count if isinstance(last, RepeatedCommand) else 1
@@ -88,13 +93,6 @@ class CommandLog:
             client=event.client,
             count=count + 1,
         )
-
-
-def _same(a: Sequence[float], b: Sequence[float]) -> bool:
-    """Equal reply values, NaN equal to NaN."""
-    return len(a) == len(b) and all(
-        x == y or (math.isnan(x) and math.isnan(y)) for x, y in zip(a, b, strict=True)
-    )
 
 
 def reply_text(value: float) -> str:

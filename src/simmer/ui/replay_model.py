@@ -54,7 +54,7 @@ from simmer.ui.video import FPS, FrameClock
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event, ResetEvent
 from simmer.world.outcome import OutcomeReport
-from simmer.world.replay import feed
+from simmer.world.replay import feed, same_replies
 
 __all__ = [
     "FPS",
@@ -180,13 +180,7 @@ class ReplayCommand:
     @property
     def differs(self) -> bool:
         """Whether the re-simulation answered otherwise than the recording says."""
-        return not _same_replies(self.event.replies, self.recorded)
-
-
-def _same_replies(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
-    return len(a) == len(b) and all(
-        x == y or (math.isnan(x) and math.isnan(y)) for x, y in zip(a, b, strict=True)
-    )
+        return not same_replies(self.event.replies, self.recorded)
 
 
 class _Collector:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 from simmer.config.models import SimConfig
@@ -37,6 +37,12 @@ class Replayed:
 def _same(a: float, b: float) -> bool:
     """Bit for bit (so NaN equals NaN and 0.0 differs from -0.0)."""
     return (math.isnan(a) and math.isnan(b)) or struct.pack("<d", a) == struct.pack("<d", b)
+
+
+def same_replies(a: Sequence[float], b: Sequence[float]) -> bool:
+    """Whether two messages' replies are the same, value for value, bit for bit (NaN equal to
+    NaN): what a replay must give back, and what the HUD counts as a repeat."""
+    return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
 
 
 def replay(
@@ -71,9 +77,7 @@ def feed(sim: Simulation, events: Iterable[Event], until_step: int | None = None
             sim.step()
         if isinstance(event, CommandEvent):
             replies = sim.command(event.message, client=event.client)
-            if len(replies) != len(event.replies) or not all(
-                _same(a, b) for a, b in zip(replies, event.replies, strict=False)
-            ):
+            if not same_replies(replies, event.replies):
                 result.differences.append(
                     f"step {event.step}: {event.message!r} answered {replies}, "
                     f"recorded {list(event.replies)}"
