@@ -453,6 +453,31 @@ def test_sigterm_and_sighup_stop_cleanly_and_remove_the_serial_link(
     assert "stopped" in output(tmp_path)
 
 
+class _DiesWithASignal:
+    """An object whose finalizer is where a stop signal lands."""
+
+    def __del__(self) -> None:
+        os.kill(os.getpid(), signal.SIGTERM)
+        sum(range(1000))  # the handler runs between these bytecodes, inside the finalizer
+
+
+def test_a_stop_signal_landing_in_a_finalizer_still_stops_the_run() -> None:
+    """An exception raised from a finalizer is ignored by Python: once, under load, SIGTERM
+    landed in one of Numba's while the handler raised KeyboardInterrupt, and the run never
+    stopped. The handler now only sets the stop event and wakes the loop."""
+    from simmer.serve import _stop_on_signals
+
+    stop, woken, received = threading.Event(), [], []
+    restore = _stop_on_signals(stop, lambda: woken.append(True), received)
+    try:
+        _DiesWithASignal()  # collected at once: the signal arrives in its __del__
+    finally:
+        restore()
+    assert stop.is_set()
+    assert woken == [True]
+    assert received == ["SIGTERM"]
+
+
 @pytest.mark.parametrize("kind", ["symlink", "dangling", "file"])
 def test_serial_link_never_replaces_what_it_did_not_create(tmp_path: Path, kind: str) -> None:
     target = tmp_path / "my-robot"

@@ -46,26 +46,28 @@ STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 """Signals that stop a run as Ctrl-C does (``kill``, closing the terminal), where they exist."""
 
 
-def _stop_on_signals() -> Callable[[], None]:
-    """Make :data:`STOP_SIGNALS` raise :class:`KeyboardInterrupt` in the main thread, so a run
-    ends through the same cleanup as Ctrl-C (serial link removed, ports closed) instead of
-    dying at once; a second signal during that cleanup is ignored. Returns what puts the
-    previous handlers back. Off the main thread (tests) nothing changes: only the main thread
-    may install handlers."""
+def _stop_on_signals(
+    stop: threading.Event, wake: Callable[[], None], received: list[str]
+) -> Callable[[], None]:
+    """Make :data:`STOP_SIGNALS` stop a run as Esc does: note the signal in ``received``, set
+    ``stop`` and ``wake`` the loop, so the run ends through its usual cleanup (serial link
+    removed, ports closed, recordings finished). The handler raises nothing: an exception
+    raised wherever the main thread happens to be can be swallowed (a signal landing in a
+    finalizer, which Python ignores exceptions from, once left a run that never stopped) or
+    leave a lock held. Returns what puts the previous handlers back. Off the main thread
+    (tests) nothing changes: only the main thread may install handlers."""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
-    stopping = False
 
-    def stop(signum: int, _frame: FrameType | None) -> None:
-        nonlocal stopping
-        if not stopping:
-            stopping = True
-            raise KeyboardInterrupt(signal.Signals(signum).name)
+    def handle(signum: int, _frame: FrameType | None) -> None:
+        received.append(signal.Signals(signum).name)
+        stop.set()
+        wake()
 
     previous = {}
     for name in STOP_SIGNALS:
         if (number := getattr(signal, name, None)) is not None:
-            previous[number] = signal.signal(number, stop)
+            previous[number] = signal.signal(number, handle)
 
     def restore() -> None:
         for number, handler in previous.items():
@@ -140,7 +142,8 @@ def serve(
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
-    restore_signals = _stop_on_signals()
+    signalled: list[str] = []
+    restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
     try:
@@ -184,7 +187,10 @@ def serve(
                 pace = "as fast as possible" if speed is None else f"{speed:g}x real time"
                 echo(f"running headless, {pace}; Ctrl-C to stop")
                 runner.run(stop_event=stop, until=seconds)
-            if not ended:
+            if signalled:
+                echo(f"stopped ({signalled[0]})")
+                ended.insert(0, "quit")
+            elif not ended:
                 limit = seconds is not None and sim.time >= seconds - 1e-9
                 ended.append("seconds" if limit else "quit")
     except KeyboardInterrupt:

@@ -128,6 +128,13 @@ class CommandBus:
             if not self._closed:
                 self._wake()
 
+    def wake_from_signal(self) -> None:
+        """Wake the loop thread from a signal handler: without a lock (the code the signal
+        interrupted may hold it); nothing once the bus is closed (its pipe is gone)."""
+        if not self._closed:
+            with contextlib.suppress(OSError):
+                os.write(self._wake_w, b"\0")
+
     def _wake(self) -> None:
         """Interrupt the loop's wait (caller holds ``_lock`` and the bus is open)."""
         with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
