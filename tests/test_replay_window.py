@@ -393,7 +393,7 @@ def decoded_mp4(path: Path) -> tuple[int, int, int]:
 
 
 def test_simmer_render_cuts_a_clip_of_the_time_asked_for(run_folder: Path, tmp_path: Path) -> None:
-    clip = tmp_path / "clip.mp4"
+    clip = tmp_path / "clips" / "clip.mp4"  # its folder is made
     result = CliRunner().invoke(
         app, ["render", str(run_folder), "--from", "2", "--to", "5.5", "-o", str(clip)]
     )

@@ -318,9 +318,17 @@ def test_simmer_run_refuses_a_video_it_cannot_write(tmp_path: Path) -> None:
     wrong = simmer_run("--seconds", "1", "--video", str(tmp_path / "out.avi"))
     assert wrong.returncode == 2
     assert ".mp4 or .gif" in wrong.stderr
-    missing = simmer_run("--seconds", "1", "--video", str(tmp_path / "nowhere" / "out.mp4"))
-    assert missing.returncode == 1
-    assert "no writable folder" in missing.stderr
+    (tmp_path / "a-file").write_text("in the way")
+    blocked = simmer_run("--seconds", "1", "--video", str(tmp_path / "a-file" / "out.mp4"))
+    assert blocked.returncode == 1
+    assert "no writable folder" in blocked.stderr
+
+
+def test_simmer_run_video_makes_its_folder(tmp_path: Path) -> None:
+    path = tmp_path / "runs" / "task1.mp4"  # as the Lab 1 page has it, in a new folder
+    done = simmer_run("--seconds", "0.2", "--video", str(path))
+    assert done.returncode == 0, done.stderr
+    assert path.stat().st_size > 0
 
 
 def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:

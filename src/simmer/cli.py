@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import logging
 import os
@@ -361,7 +362,8 @@ def run(
 
 
 def _check_video(path: Path) -> None:
-    """Refuse a video file that cannot be written before any port opens."""
+    """Refuse a video file that cannot be written before any port opens; make its folder if
+    it is missing (as --record does: ``--video runs/task1.mp4`` in a new project)."""
     from simmer.ui.video import check_video_path
 
     try:
@@ -369,6 +371,8 @@ def _check_video(path: Path) -> None:
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--video") from None
     folder = path.parent
+    with contextlib.suppress(OSError):  # said just below, as for a folder not writable
+        folder.mkdir(parents=True, exist_ok=True)
     if not folder.is_dir() or not os.access(folder, os.W_OK):
         err.print(
             f"cannot write the video {path}: no writable folder {folder}",

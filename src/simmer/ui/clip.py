@@ -56,8 +56,11 @@ def write_clip(
         path = check_video_path(path, fps)
     except ValueError as exc:
         raise ReplayError(str(exc)) from None
-    if not path.parent.is_dir():
-        raise ReplayError(f"cannot write {path}: no folder {path.parent}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        reason = exc.strerror or exc
+        raise ReplayError(f"cannot write {path}: no folder {path.parent} ({reason})") from None
     scene = recording.scene
     size = even_size(default_window_size(scene))
     canvas = OffscreenRenderer(scene, pygame.Surface(size, 0, 32))
