@@ -103,13 +103,37 @@ def test_build_config_overrides_toml_and_config_py(path: Path) -> None:
     assert noisy.settings == plain.settings
 
 
-def test_an_override_that_does_not_validate_is_an_invalid_run(tmp_path: Path) -> None:
-    spec = policy_sweep(tmp_path, "drive_and_stop", grid={NOISE: ["lots"]})
+def test_a_grid_value_or_key_no_run_could_use_stops_the_sweep_before_it_starts(
+    tmp_path: Path,
+) -> None:
+    for grid, words in (
+        ({NOISE: [0.0, "lots"]}, "drives.w0.error.y = 'lots'"),
+        ({"drives.w0.eror.y": [0.1]}, "did you mean 'error'?"),
+    ):
+        spec = policy_sweep(tmp_path, "drive_and_stop", grid=grid)
+        with pytest.raises(SweepError, match="is not a valid configuration") as caught:
+            run_sweep(spec, tmp_path / "out", workers=1)
+        assert words in str(caught.value)
+        assert not (tmp_path / "out").exists()  # nothing ran, nothing was written
+
+
+def test_a_drawn_value_that_does_not_validate_is_an_invalid_run(tmp_path: Path) -> None:
+    sample = {"count": 6, NOISE: {"choice": [0.0, "lots"]}}  # typical (first) value: valid
+    spec = policy_sweep(tmp_path, "drive_and_stop", sample=sample)
     run_sweep(spec, tmp_path / "out", workers=1)
-    (row,) = read_table(tmp_path / "out" / "results.csv")
-    assert row["status"] == "invalid"
-    assert "drives.w0.error.y" in row["detail"]
-    assert row["success"] == "False"
+    rows = read_table(tmp_path / "out" / "results.csv")
+    invalid = [row for row in rows if row[NOISE] == "lots"]
+    assert invalid, "the draws include the invalid choice"
+    assert all(row["status"] == "invalid" and NOISE in row["detail"] for row in invalid)
+    assert all(row["success"] == "False" for row in invalid)
+    assert all(row["status"] == "ok" for row in rows if row[NOISE] != "lots")
+
+
+def test_a_sweep_file_mistake_names_the_file(tmp_path: Path) -> None:
+    sweep = tmp_path / "my_sweep.toml"
+    sweep.write_text(f'config = "{LAB1}"\nprogram = "python x.py"\nkeep = "failure"\n')
+    with pytest.raises(SweepError, match=r"my_sweep\.toml: keep: .*did you mean 'failures'"):
+        load_sweep(sweep)
 
 
 def test_success_condition_uses_outcome_fields_only() -> None:

@@ -609,6 +609,9 @@ def sweep(
             console=err,
             source=sweep_file.name,
         )
+    except SweepError as exc:  # a setting no run could use: found before any run
+        err.print(f"{sweep_file}: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
     except (FileExistsError, ValueError) as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None

@@ -174,10 +174,12 @@ def run_sweep(
     console: Console | None = None,
     source: str = "",
 ) -> SweepResult:
-    """Run every run of ``spec`` not yet in ``folder``/results.csv (``resume``), append each
-    row (and write each kept run's folder) as it finishes, put the table in the sweep's order,
-    film the first failures, and write summary.md."""
+    """Check every setting (:meth:`SweepSpec.check_settings`), run every run of ``spec`` not
+    yet in ``folder``/results.csv (``resume``), append each row (and write each kept run's
+    folder) as it finishes, put the table in the sweep's order, film the first failures, and
+    write summary.md."""
     started = time.perf_counter()
+    spec.check_settings()
     runs = spec.runs()
     names = spec.folder_names(runs)
     results = ResultsFile(folder / "results.csv", header(spec), resume=resume)

@@ -110,6 +110,13 @@ class Distribution:
             return float(rng.normal(*self.values))
         return self.values[int(rng.integers(len(self.values)))]
 
+    def typical(self) -> Any:
+        """A value it gives: the middle of ``uniform``, the mean of ``normal``, the first
+        choice (what :meth:`SweepSpec.check_settings` tries the key with)."""
+        if self.kind == "uniform":
+            return (self.values[0] + self.values[1]) / 2
+        return self.values[0]
+
     def __str__(self) -> str:
         return f"{self.kind}({', '.join(map(str, self.values))})"
 
@@ -189,6 +196,28 @@ class SweepSpec:
                         )
         return runs
 
+    def check_settings(self) -> None:
+        """Build each configuration with each combination of the grid's values (and each
+        sampled key at a typical value), so a misspelt key or a value no run could use stops
+        the sweep before it starts, naming the setting and the fix; :class:`SweepError`. A
+        random draw outside a key's range later is a run's own ``invalid`` row."""
+        from simmer.errors import ConfigError
+        from simmer.sweep.runs import build_config
+
+        typical = tuple((key, spread.typical()) for key, spread in self.sample)
+        for config in self.configs:
+            for values in itertools.product(*(values for _, values in self.grid)):
+                grid = tuple(zip((key for key, _ in self.grid), values, strict=True))
+                try:
+                    build_config(str(config), grid + typical)
+                except (ConfigError, KeyError) as exc:
+                    setting = ", ".join(f"{key} = {value!r}" for key, value in grid + typical)
+                    reason = exc.args[0] if isinstance(exc, KeyError) else str(exc)
+                    raise SweepError(
+                        f"{config.name} with {setting or 'no overrides'} is not a valid "
+                        f"configuration: {reason}"
+                    ) from None
+
     def folder_names(self, runs: list[RunSpec]) -> dict[str, str]:
         """The name of each run's folder under ``runs/``, by run key: the setting and seed
         (``drives.w0.error.y=0.05_seed3``), or the run's key and seed if those are too long
@@ -229,7 +258,10 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise SweepError(f"cannot read {path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SweepError(f"{path} is not valid TOML: {exc}") from None
-    return sweep_from_dict(data, path.resolve().parent)
+    try:
+        return sweep_from_dict(data, path.resolve().parent)
+    except SweepError as exc:
+        raise SweepError(f"{path}: {exc}") from None
 
 
 def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
