@@ -484,3 +484,13 @@ def test_a_run_cut_short_is_replayed_as_far_as_it_goes(copy: Path) -> None:
     result = CliRunner().invoke(app, ["replay", "--check", str(copy)])
     assert result.exit_code == 0
     assert "incomplete recording" in result.stderr
+
+
+def test_replay_without_a_screen_says_what_to_do_instead(run_folder: Path) -> None:
+    """A replay nobody can see would play forever: with no screen (the dummy driver here) it
+    stops at once and names the commands that work without one."""
+    result = CliRunner().invoke(app, ["replay", str(run_folder)])
+    assert result.exit_code == 1
+    assert "no screen found" in result.output
+    assert "simmer render" in result.output
+    assert "--check" in result.output

@@ -11,7 +11,6 @@ frame it points at, so seeking costs one frame's drawing.
 
 from __future__ import annotations
 
-import logging
 import math
 import textwrap
 from collections.abc import Callable
@@ -30,7 +29,6 @@ from simmer.ui.window import HIDDEN_DRIVERS, new_file, save_screenshot
 
 __all__ = ["REPLAY_HELP", "ReplayWindow", "paint_panel", "paint_timeline", "run_replay"]
 
-log = logging.getLogger("simmer.ui")
 
 PANEL_WIDTH = 440
 """Pixels of the command panel right of the maze."""
@@ -393,16 +391,22 @@ class ReplayWindow:
 
 def run_replay(recording: Recording, echo: Callable[[str], None] | None = None) -> None:
     """Open a window on ``recording``, playing from the start, until the user quits;
-    :class:`SimmerError` if no window can be opened. ``echo`` hears "window open" once it is
-    open, if it can be seen (if not, the log says so)."""
+    :class:`SimmerError` if no window can be opened or none could be seen (no screen: unlike
+    a live run, which still serves, a replay nobody sees does nothing). ``echo`` hears
+    "window open" once it is open."""
+    instead = (
+        "simmer render DIR -o clip.mp4 makes a video of it, and simmer replay --check DIR "
+        "compares it with its recording without a window"
+    )
     try:
         window = ReplayWindow(recording)
     except pygame.error as exc:
-        raise SimmerError(f"cannot open a window ({exc}); simmer replay needs a screen") from None
+        raise SimmerError(f"cannot open a window ({exc}); {instead}") from None
     driver = pygame.display.get_driver()
     if driver in HIDDEN_DRIVERS:
-        log.warning("no screen found (SDL video driver %r): the replay cannot be seen", driver)
-    elif echo is not None:
+        window.close()
+        raise SimmerError(f"no screen found (SDL video driver {driver!r}); {instead}")
+    if echo is not None:
         echo("replay window open (press h for the keys)")
     window.playhead.playing = True
     try:
