@@ -49,6 +49,35 @@ def make_config(data: dict[str, Any]) -> SimConfig:
     return config_from_dict(data, "<test>", REPO)
 
 
+def noisy_config() -> SimConfig:
+    """:func:`noisy_data`, validated."""
+    return make_config(noisy_data())
+
+
+def drive_noisily(sim: Simulation, reset: bool = True) -> None:
+    """Every kind of input: commands with reads, a bad command, held keys, a drag, a collision
+    and (optionally) a reset followed by a turn."""
+    for message in LAB_SEQUENCE[:4]:
+        sim.command("u0,u1,u2,u3", client="test")
+        sim.command(message)
+        while sim.robot.any_drive_moving:
+            sim.step()
+            if sim.frame % 7 == 0:
+                sim.command("u0,w0-0,u9")  # u9: no such device, NaN
+    sim.set_manual_keys("wd")
+    sim.step(40)
+    sim.set_manual_keys("")
+    assert sim.place_robot(6.0, 30.0, 90.0)
+    sim.command("w0-30,u1")  # into a wall: a collision, then out of it
+    sim.step(400)
+    sim.command("w0--6")
+    sim.step(100)
+    if reset:
+        sim.reset()
+        sim.command("r0-45,u0")
+        sim.step(50)
+
+
 def make_sim(data: dict[str, Any] | None = None, seed: int | None = None) -> Simulation:
     """A simulation of ``data`` (default: the built-in default)."""
     return Simulation(make_config(data if data is not None else default_data()), seed=seed)

@@ -18,7 +18,7 @@ from simmer.serve import Served, serve
 from simmer.transport.local import LocalLink
 from simmer.world.events import CommandEvent, Event, StepEvent
 
-from helpers import EXAMPLES, REPO, make_config, noisy_data
+from helpers import EXAMPLES, REPO, noisy_config
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -29,7 +29,7 @@ from program import drive_around  # noqa: E402
 
 def noisy_sim() -> Simulation:
     """The default rover with noisy drives and sensors, seeded."""
-    return Simulation(make_config(noisy_data()), seed=17)
+    return Simulation(noisy_config(), seed=17)
 
 
 class Fingerprint:

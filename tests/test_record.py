@@ -20,7 +20,7 @@ import pytest
 from typer.testing import CliRunner
 
 import simmer
-from simmer import SimConfig, Simulation
+from simmer import Simulation
 from simmer.cli import app
 from simmer.config import load_config
 from simmer.geometry import Pose
@@ -49,40 +49,12 @@ from simmer.world.events import (
 )
 from simmer.world.replay import replay
 
-from helpers import EXAMPLES, LAB_SEQUENCE, SIMMER_PY, make_config, noisy_data
+from helpers import EXAMPLES, LAB_SEQUENCE, SIMMER_PY, drive_noisily, noisy_config
 
 pytestmark = pytest.mark.timeout(180)
 
 FILES = ("manifest.json", "events.jsonl", "trace.csv", "report.json", "report.md")
 SENSORS = ["u0", "u1", "u2", "u3"]
-
-
-def noisy_config() -> SimConfig:
-    return make_config(noisy_data())
-
-
-def drive_noisily(sim: Simulation, reset: bool = True) -> None:
-    """Commands with reads, a bad command, held keys, a drag, a collision and (optionally) a
-    reset: every kind of input."""
-    for message in LAB_SEQUENCE[:4]:
-        sim.command("u0,u1,u2,u3", client="test")
-        sim.command(message)
-        while sim.robot.any_drive_moving:
-            sim.step()
-            if sim.frame % 7 == 0:
-                sim.command("u0,w0-0,u9")  # u9: no such device, NaN
-    sim.set_manual_keys("wd")
-    sim.step(40)
-    sim.set_manual_keys("")
-    assert sim.place_robot(6.0, 30.0, 90.0)
-    sim.command("w0-30,u1")  # into a wall: a collision, then out of it
-    sim.step(400)
-    sim.command("w0--6")
-    sim.step(100)
-    if reset:
-        sim.reset()
-        sim.command("r0-45,u0")
-        sim.step(50)
 
 
 def record_noisy_run(folder: Path, reset: bool = True) -> Simulation:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from simmer import SimConfig, Simulation
+from simmer import Simulation
 from simmer.world.events import (
     CollisionEndEvent,
     CollisionEvent,
@@ -19,35 +19,14 @@ from simmer.world.events import (
 )
 from simmer.world.replay import replay
 
-from helpers import LAB_SEQUENCE, make_config, noisy_data
-
-
-def noisy_config() -> SimConfig:
-    return make_config(noisy_data())
+from helpers import drive_noisily, noisy_config
 
 
 def a_noisy_run(events: list[Event]) -> Simulation:
-    """Drive the lab's sequence with reads, hold keys, drag the robot, reset, drive again."""
+    """A noisy run of every kind of input (a reset included), its events kept in ``events``."""
     sim = Simulation(noisy_config(), seed=23)
     sim.add_observer(events.append)
-    for message in LAB_SEQUENCE[:5]:
-        sim.command("u0,u1,u2,u3", client="test")
-        sim.command(message)
-        while sim.robot.any_drive_moving:
-            sim.step()
-            if sim.frame % 7 == 0:
-                sim.command("u0,w0-0")
-    sim.set_manual_keys("wd")
-    sim.step(40)
-    sim.set_manual_keys("")
-    assert sim.place_robot(6.0, 30.0, 90.0)
-    sim.command("w0-30")  # into a wall: a collision, then out of it
-    sim.step(400)
-    sim.command("w0--6")
-    sim.step(100)
-    sim.reset()
-    sim.command("r0-45,u0")
-    sim.step(50)
+    drive_noisily(sim)
     return sim
 
 

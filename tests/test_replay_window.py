@@ -36,7 +36,7 @@ from simmer.ui.replay import (
 from simmer.ui.replay_model import FPS, SPEEDS, Playhead, Recording, Timeline
 from simmer.ui.scene import TRAIL_COLOR
 
-from helpers import LAB_SEQUENCE, make_config, noisy_data
+from helpers import LAB_SEQUENCE, noisy_config
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -46,7 +46,7 @@ CLIENT = "stream 127.0.0.1:50312"
 def record_run(folder: Path) -> None:
     """A noisy run of about 15 simulated seconds: the lab's first three moves with the sensors
     read before each, held keys, and a last reading."""
-    sim = Simulation(make_config(noisy_data()), seed=11)
+    sim = Simulation(noisy_config(), seed=11)
     with RunRecorder(sim, folder):
         for message in LAB_SEQUENCE[:3]:
             sim.command("u0,u1,u2,u3", client=CLIENT)

@@ -15,7 +15,15 @@ from simmer.sweep import WARM, RunResult, RunSpec, build_config, execute
 from simmer.sweep.results import row
 from simmer.world import Simulation
 
-from helpers import EXAMPLES, LAB_SEQUENCE, REPO, make_config, noisy_data, run_sequence
+from helpers import (
+    EXAMPLES,
+    LAB_SEQUENCE,
+    REPO,
+    make_config,
+    noisy_config,
+    noisy_data,
+    run_sequence,
+)
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -26,7 +34,7 @@ NOISE = (("drives.w0.error.y", 0.05), ("drives.r0.error.rotation", 0.02), ("sens
 
 
 def test_reset_with_a_seed_starts_as_a_new_simulation_with_that_seed() -> None:
-    config = make_config(noisy_data())
+    config = noisy_config()
 
     def readings(sim: Simulation) -> list[object]:
         run_sequence(sim, LAB_SEQUENCE[:4])
