@@ -8,7 +8,6 @@ import math
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
 
 import pytest
 
@@ -88,15 +87,6 @@ def local_run() -> str:
     robot = Client(link, lockstep=True)
     drive_around(robot, robot.sleep, lambda: link.clock("!time"))
     return fingerprint.hexdigest()
-
-
-@pytest.fixture
-def busy_cpu() -> Any:
-    """Another process keeping a CPU busy while the runs go on."""
-    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
-    yield
-    hog.kill()
-    hog.wait()
 
 
 def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> None:

@@ -23,6 +23,7 @@ from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
 
 if TYPE_CHECKING:
+    from simmer.config import SimConfig
     from simmer.transport.bus import CommandBus
     from simmer.ui.video import VideoRecorder
 
@@ -156,6 +157,7 @@ def serve(
             stream_port=stream_port,
             serial=serial,
             serial_link=serial_link,
+            lockstep=lockstep,
         )
         with link:
             if record is not None:
@@ -177,7 +179,9 @@ def serve(
                     f"and {runner.link_delay:g} s per message"
                 )
             if program is not None:
-                started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
+                started = _start_program(
+                    program, link, sim.config, runner.bus, stop, ended, timeout, echo
+                )
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
                 from simmer.ui import run_window
@@ -230,6 +234,7 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 def _start_program(
     command: str,
     link: Link,
+    config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
     ended: list[str],
@@ -243,7 +248,9 @@ def _start_program(
         "port_tx": link.two_port.port_tx,
         "stream": link.stream.port,
     }
-    env = program_environment(ports, link.host)
+    settings = config.settings
+    configured = {"port_rx": settings.port_rx, "port_tx": settings.port_tx}
+    env = program_environment(ports, link.host, configured=configured)
     if link.serial is not None:
         env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
     program = Program.start(command, env)

@@ -198,7 +198,13 @@ def _validate_devices(
                 continue
             id_problem = _id_problem(device_id)
             if id_problem:
-                issues.append(ConfigIssue(key, id_problem))
+                found.strict(
+                    key,
+                    id_problem,
+                    f"device id {device_id!r} is not two ASCII characters, so no command can "
+                    "reach it: a command names a device by its first two characters, and the "
+                    "original answered 'Not Found' (v1.2) or NaN; rename it (like 'u1') to use it",
+                )
             if device_id in seen:
                 issues.append(
                     ConfigIssue(
