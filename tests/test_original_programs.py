@@ -12,8 +12,10 @@ connection with nothing waiting is closed at once, with nothing sent.
 
 from __future__ import annotations
 
+import csv
 import dataclasses
 import hashlib
+import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -23,6 +25,7 @@ import pytest
 from simmer import Simulation
 from simmer.record.eventlog import event_line
 from simmer.serve import serve
+from simmer.sweep import run_sweep, sweep_from_dict
 from simmer.world.events import CommandEvent, Event, RunEvent
 
 from helpers import REPO, make_config, noisy_data
@@ -141,3 +144,41 @@ def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
     assert (served.ended_by, served.exit_status) == ("program", 0)
     assert "2 byte(s) the program wrote before 'sleep' never arrived" in caplog.text
     assert sim.time == pytest.approx(0.5, abs=sim.dt)
+
+
+def test_a_sweep_of_a_send_then_sleep_program_is_the_same_at_any_worker_count(
+    tmp_path: Path,
+) -> None:
+    shutil.copy(STUDENT, tmp_path)
+    spec = sweep_from_dict(
+        {
+            "config": str(REPO / "examples" / "lab1_rover.toml"),
+            "program": f"python {STUDENT.name} dead_reckoning 1.1",
+            "seeds": 3,
+            "grid": {"drives.w0.error.y": [0.02, 0.1], "drives.r0.error.rotation": [0.05]},
+            "keep": "nothing",
+        },
+        tmp_path,
+    )
+    run_sweep(spec, tmp_path / "one", workers=1)
+    run_sweep(spec, tmp_path / "two", workers=2)
+    one = without_wall_time(read_table(tmp_path / "one" / "results.csv"))
+    assert len(one) == 6
+    assert {row["status"] for row in one} == {"ok"}
+    assert len({row["final_x"] + row["final_y"] for row in one}) == 6  # noise: each its own
+    assert without_wall_time(read_table(tmp_path / "two" / "results.csv")) == one
+
+    table = tmp_path / "two" / "results.csv"  # a sweep stopped after its first three runs
+    lines = table.read_text(encoding="utf-8").splitlines(keepends=True)
+    table.write_text("".join(lines[:4]), encoding="utf-8")
+    assert run_sweep(spec, tmp_path / "two", workers=2, resume=True).ran == 3
+    assert without_wall_time(read_table(table)) == one
+
+
+def read_table(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as file:
+        return list(csv.DictReader(file))
+
+
+def without_wall_time(rows: list[dict[str, str]]) -> list[dict[str, str]]:
+    return [{k: v for k, v in row.items() if k != "wall_time"} for row in rows]

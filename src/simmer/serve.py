@@ -14,7 +14,14 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
+from simmer.lockstep import (
+    EXIT_SECONDS,
+    EXIT_TIMEOUT,
+    NOT_PYTHON,
+    Program,
+    program_environment,
+    runs_python,
+)
 from simmer.record import RunRecorder, RunSetup
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Link
@@ -178,6 +185,8 @@ def serve(
                     f"lockstep clock: simulated time advances only when the program sleeps, "
                     f"and {runner.link_delay:g} s per message"
                 )
+                if program is not None and not runs_python(program):
+                    echo(NOT_PYTHON.format(command=program))
             if program is not None:
                 started = _start_program(
                     program, link, sim.config, runner.bus, stop, ended, timeout, echo

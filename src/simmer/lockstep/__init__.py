@@ -96,6 +96,29 @@ def split_command(command: str | Sequence[str]) -> list[str]:
     return args
 
 
+def runs_python(command: str | Sequence[str]) -> bool:
+    """Whether ``command`` starts a Python program (which the shim puts on the simulated
+    clock): a Python interpreter, a ``.py`` file, or a script whose ``#!`` line names Python."""
+    args = split_command(command)
+    name = Path(args[0]).name.lower()
+    if name.startswith(("python", "pypy")) or name in ("py", "py.exe") or name.endswith(".py"):
+        return True
+    try:
+        with open(args[0], "rb") as file:
+            return b"python" in file.readline(200)
+    except OSError:
+        return False
+
+
+NOT_PYTHON = (
+    "note: {command!r} does not look like a Python program, so SimMeR cannot put its sleeps on "
+    "the simulated clock: the clock advances only by its messages (one step each) and by the "
+    "clock messages it sends. To make its runs repeatable, see 'Clock messages' in "
+    "docs/protocol.md."
+)
+"""What ``simmer run --program`` says for a program :func:`runs_python` does not recognise."""
+
+
 @dataclass
 class Program:
     """A control program started for a run, in a session of its own so that the whole process
