@@ -36,7 +36,7 @@ from simmer.protocol import (
     PackedCodec,
     frame_replies,
 )
-from simmer.runner import Runner
+from simmer.runner import LOG_LINES_PER_SECOND, Runner
 from simmer.transport import CommandBus, SerialServer, StreamServer
 from simmer.transport.tcp import MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
 from simmer.world import Simulation
@@ -73,9 +73,10 @@ def closed_by_server(sock: socket.socket) -> bool:
     return True
 
 
-def quick_sim(timeout: float = 300.0) -> Simulation:
+def quick_sim(timeout: float = 300.0, idle_timeout: float = 3600.0) -> Simulation:
     data = default_data()
     data["timeout"] = timeout
+    data["idle_timeout"] = idle_timeout
     return make_sim(data)
 
 
@@ -249,6 +250,41 @@ def test_a_reply_connection_with_nothing_to_collect_is_closed_at_once() -> None:
             assert idle.recv(64) == b""
         assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
         assert two_port_send(link, b"u0,u1")[1] == pytest.approx(3.5)
+
+
+def test_a_persistent_connection_idle_between_messages_is_closed_after_idle_timeout(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.INFO, logger="simmer.transport")
+    with serving(quick_sim(idle_timeout=0.05)) as (_, link), stream(link.stream.port) as sock:
+        for _ in range(3):  # a reply and a new message reset the clock each time
+            sock.sendall(b"u1\n")
+            assert read_frame(sock) == [pytest.approx(3.5)]
+        assert closed_by_server(sock)
+        with connect(port=link.stream.port) as robot:  # the server goes on serving
+            assert robot.read("u1") == pytest.approx(3.5)
+    assert "0.05 s between messages (idle_timeout)" in caplog.text
+
+
+def test_a_client_flooding_bad_commands_gets_ten_log_lines_a_second_then_a_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.WARNING, logger="simmer.runner")
+    with serving(speed=None) as (_, link), stream(link.stream.port) as sock:
+        started = time.monotonic()
+        for _ in range(400):
+            sock.sendall(b"zz\n")
+            assert math.isnan(read_frame(sock)[0])
+        seconds = time.monotonic() - started
+        wait_for(lambda: "more log lines in one second, not written" in caplog.text, "a count")
+    written = [r for r in caplog.records if "no device 'zz'" in r.getMessage()]
+    held = sum(
+        int(m[1])
+        for r in caplog.records
+        if (m := re.search(r"(\d+) more log lines in one second", r.getMessage()))
+    )
+    assert len(written) <= LOG_LINES_PER_SECOND * (math.ceil(seconds) + 1)
+    assert len(written) + held == 400
 
 
 def test_unclaimed_replies_expire(caplog: pytest.LogCaptureFixture) -> None:

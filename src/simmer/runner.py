@@ -43,6 +43,13 @@ MAX_WAIT = 0.05
 MAX_LOGGED = 3
 """Why-NaN lines logged per message; the rest are counted in one more line, so a message of
 1,000 bad commands writes four lines, not 1,000."""
+LOG_LINES_PER_SECOND = 10
+"""Log lines about one client's bad messages per wall-clock second; past it they are counted
+and the count is logged once the second is over (a client flooding bad commands writes ten
+lines a second, not thousands). A client is its host and transport: a two-port client uses a
+new port for every message."""
+MAX_LOG_CLIENTS = 1024
+"""Clients whose log lines are counted at once (the count starts afresh past it)."""
 MAX_REASONS = 20
 """Why-NaN reasons kept per message for the client (the persistent protocol's ``?``)."""
 
@@ -66,6 +73,49 @@ class _Wait:
     request: Request
     until: float | None
     deadline: float = math.inf
+
+
+class _LogBudget:
+    """Log lines per client, at most :data:`LOG_LINES_PER_SECOND` a wall second; the rest
+    are counted and said in one line when that client's second is over."""
+
+    def __init__(self) -> None:
+        self._spent: dict[str, tuple[float, int, int]] = {}  # second started, lines, held back
+        self.holding = False
+        """Whether some client's lines are held back (:meth:`flush` says how many)."""
+
+    def flush(self) -> None:
+        """Say how many lines were held back for each client whose second is over."""
+        now = time.monotonic()
+        self.holding = False
+        for who, (started, lines, held) in list(self._spent.items()):
+            if not held:
+                continue
+            if now - started < 1.0:
+                self.holding = True
+                continue
+            log.warning("%s: %d more log lines in one second, not written", who, held)
+            self._spent[who] = (started, lines, 0)
+
+    def log(self, client: str, level: int, text: str, *args: object) -> None:
+        """Log ``text % args`` about ``client`` (already printable) unless its budget is
+        spent."""
+        who = client.rsplit(":", 1)[0] if client.startswith(("two-port ", "stream ")) else client
+        now = time.monotonic()
+        started, lines, held = self._spent.get(who, (now, 0, 0))
+        if now - started >= 1.0:
+            if held:
+                log.warning("%s: %d more log lines in one second, not written", who, held)
+            started, lines, held = now, 0, 0
+        if lines < LOG_LINES_PER_SECOND:
+            log.log(level, text, *args)
+            lines += 1
+        else:
+            held += 1
+            self.holding = True
+        if len(self._spent) >= MAX_LOG_CLIENTS and who not in self._spent:
+            self._spent.clear()
+        self._spent[who] = (started, lines, held)
 
 
 @dataclass
@@ -120,6 +170,7 @@ class Runner:
         self._reads = 0
         self._waits: list[_Wait] = []
         self._held: deque[_Held] = deque()
+        self._log = _LogBudget()
         self._forgiven = 0
         """Bytes a clock message gave up waiting for (:data:`SYNC_WAIT`), counted as taken."""
 
@@ -174,7 +225,8 @@ class Runner:
         self.bus.took(decoded.size)
         if decoded.text is None:
             error = printable(str(decoded.error))
-            log.warning("bad message from %s: %s", printable(request.client), error)
+            client = printable(request.client)
+            self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
             request.reasons.append(error)
             replies = [math.nan] * decoded.count
             message = f"<{decoded.error}>"
@@ -314,15 +366,21 @@ class Runner:
                 waiting.append(wait)
         self._waits = waiting
 
-    @staticmethod
-    def _report(client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
-        """Log the first few (level, text) records of one message and count the rest; keep
-        the first :data:`MAX_REASONS` for the client."""
+    def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
+        """Log the first few (level, text) records of one message and count the rest (and no
+        more than the client's budget, :class:`_LogBudget`); keep the first
+        :data:`MAX_REASONS` for the client."""
         for level, text in records[:MAX_LOGGED]:
-            log.log(level, "%s: %s", client, text)
+            self._log.log(client, level, "%s: %s", client, text)
         more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])
         if more:
-            log.warning("%s: %d more bad commands in that message, not logged", client, more)
+            self._log.log(
+                client,
+                logging.WARNING,
+                "%s: %d more bad commands in that message, not logged",
+                client,
+                more,
+            )
         reasons.extend(text for _, text in records[:MAX_REASONS])
         if len(records) > MAX_REASONS:
             reasons.append(f"... and {len(records) - MAX_REASONS} more")
@@ -351,6 +409,8 @@ class Runner:
             served += 1
         if self._held:
             self._release()
+        if self._log.holding:
+            self._log.flush()
         self._settle()
         return served
 

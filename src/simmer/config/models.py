@@ -103,6 +103,14 @@ class Settings(BaseModel):
         description="Seconds (at most a day) a serial reply, a connection that has not sent a "
         "whole message, or an uncollected two-port reply may wait before it is given up.",
     )
+    idle_timeout: float = Field(
+        3600.0,
+        gt=0,
+        le=MAX_TIMEOUT,
+        description="Seconds (at most a day) a persistent connection may stay open between "
+        "messages before it is closed (a program sitting at a prompt keeps its connection "
+        "for an hour).",
+    )
     str_encoding: str = Field("utf-8", description="Text encoding of commands.")
     # Block
     block_position: Point = Field((66.0, 5.0), description="Block centre [x, y], inches.")

@@ -84,6 +84,7 @@ class Link:
                 width=settings.reply_bytes,
                 encoding=settings.str_encoding,
                 timeout=settings.timeout,
+                idle_timeout=settings.idle_timeout,
             )
             if serial or serial_link is not None:
                 self.serial = SerialServer(bus, serial_link, codec=codec, timeout=settings.timeout)

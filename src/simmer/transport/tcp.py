@@ -209,10 +209,17 @@ class _Server:
     kind = "tcp"
 
     def __init__(
-        self, bus: CommandBus, host: str, ports: list[int], timeout: float = 300.0
+        self,
+        bus: CommandBus,
+        host: str,
+        ports: list[int],
+        timeout: float = 300.0,
+        idle_timeout: float | None = None,
     ) -> None:
         self.bus = bus
         self.timeout = timeout
+        self.idle_timeout = idle_timeout
+        """Seconds a connection may sit between messages (None: no limit)."""
         self.order = itertools.count()
         self._lock = threading.Lock()
         self._connections: set[_Connection] = set()
@@ -305,8 +312,10 @@ class _Server:
             self._watch_listener(index)
 
     def _sweep_interval(self) -> float:
-        """Seconds between idle sweeps: a quarter of the timeout, within 0.05 s and 1 s."""
-        return min(1.0, max(0.05, self.timeout / 4))
+        """Seconds between idle sweeps: a quarter of the shorter timeout, within 0.01 s and
+        1 s."""
+        shortest = min(self.timeout, self.idle_timeout or self.timeout)
+        return min(1.0, max(0.01, shortest / 4))
 
     def _sweep(self) -> None:
         """Loop thread, every second or so: close connections past their deadline."""
@@ -321,12 +330,14 @@ class _Server:
             for connection in late:
                 connection.close()
             if late:
+                idle = f" or {self.idle_timeout:g} s between messages" if self.idle_timeout else ""
                 log.info(
-                    "%s: closed %d connection(s) idle for %g s with no complete message "
-                    "(or no reply to collect): %s",
+                    "%s: closed %d connection(s) that waited too long: %g s for a whole "
+                    "message (or a reply to collect; the timeout setting)%s (idle_timeout): %s",
                     self.kind,
                     len(late),
                     self.timeout,
+                    idle,
                     ", ".join(c.client for c in late[:3]) + (", ..." if len(late) > 3 else ""),
                 )
             self.swept(now)
@@ -604,8 +615,9 @@ class StreamServer(_Server):
         width: int = 4,
         encoding: str = "utf-8",
         timeout: float = 300.0,
+        idle_timeout: float = 3600.0,
     ) -> None:
-        super().__init__(bus, host, [port], timeout)
+        super().__init__(bus, host, [port], timeout, idle_timeout)
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -639,6 +651,7 @@ class _StreamConnection(_Connection):
         self.latest: Future[list[float]] | None = None  # the last message submitted
         self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
         self.messages = 0
+        self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
         self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
 
     def reading(self) -> bool:
@@ -687,17 +700,20 @@ class _StreamConnection(_Connection):
         self.update_events()
 
     def rearm(self) -> None:
-        """Set the idle deadline while the client owes a message: before its first one, or
-        with part of a line received; not between messages or while it waits for us."""
+        """Set the deadline while the client owes us something: ``timeout`` before its first
+        message or with part of a line received, ``idle_timeout`` between messages; none
+        while it waits for us."""
         if self.closed:
             return
-        owed = (not self.messages or self.inbox) and not (
-            self.ended or self.in_flight or self.outbox
-        )
-        if not owed:
+        if self.ended or self.in_flight or self.outbox:
             self.deadline = None
-        elif self.deadline is None:
-            self.deadline = time.monotonic() + self.server.timeout
+            return
+        owed = not self.messages or bool(self.inbox)
+        kind = "owed" if owed else "idle"
+        if self.deadline is None or kind != self.waiting_for:
+            limit = self.server.timeout if owed else self.server.idle_timeout
+            self.deadline = None if limit is None else time.monotonic() + limit
+        self.waiting_for = kind
 
     def submit(self, decoded: Decoded) -> None:
         """Queue one message; its frame is sent as soon as the loop has answered it."""
