@@ -16,6 +16,7 @@ import csv
 import dataclasses
 import hashlib
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,7 @@ from simmer.serve import serve
 from simmer.sweep import run_sweep, sweep_from_dict
 from simmer.world.events import CommandEvent, Event, RunEvent
 
-from helpers import REPO, make_config, noisy_data
+from helpers import REPO, SIMMER_PY, make_config, noisy_data
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -182,3 +183,22 @@ def read_table(path: Path) -> list[dict[str, str]]:
 
 def without_wall_time(rows: list[dict[str, str]]) -> list[dict[str, str]]:
     return [{k: v for k, v in row.items() if k != "wall_time"} for row in rows]
+
+
+def test_the_originals_dead_reckoning_idea_prints_the_same_three_times(busy_cpu: None) -> None:
+    # The issue's report: `simmer run config.py --headless --program "python3 -u
+    # dead_reckoning.py"` with drive error on printed other readings each run.
+    command = [
+        sys.executable, "-m", "simmer", "run", str(SIMMER_PY / "lab_rover_noisy.py"),
+        "--headless", "--program", f"{sys.executable} -u {STUDENT} dead_reckoning 1.0",
+    ]  # fmt: skip
+    printed = []
+    for _ in range(3):
+        done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+        assert done.returncode == 0, done.stderr
+        lines = done.stdout.splitlines()
+        start = next(i for i, line in enumerate(lines) if line.startswith("Ultrasonic 0"))
+        printed.append(lines[start:-1])  # the program's printout and the outcome; not the log
+    assert printed[0][-4].startswith("done")
+    assert printed[0][-3].startswith("outcome after")
+    assert printed[0] == printed[1] == printed[2]
