@@ -12,13 +12,46 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
+from typer.core import TyperArgument, TyperCommand
 
-from simmer.config import SimConfig, load_config, summarize
 from simmer.errors import ConfigError
 from simmer.ports import STREAM_PORT
 
 if TYPE_CHECKING:
+    from simmer.config import SimConfig
     from simmer.ui.replay_model import Recording
+
+class _Command(TyperCommand):
+    """A command whose help shows arguments as ``CONFIG`` / ``[CONFIG]`` with their help, as
+    click does (typer writes ``{config}`` and ``<path>``)."""
+
+    def collect_usage_pieces(self, ctx: typer.Context) -> list[str]:
+        """``[OPTIONS] CONFIG``: an optional argument in brackets, a required one bare."""
+        pieces = [self.options_metavar] if self.options_metavar else []
+        for param in self.get_params(ctx):
+            if isinstance(param, TyperArgument):
+                name = _argument_name(param)
+                pieces.append(name if param.required else f"[{name}]")
+        return pieces
+
+    def format_options(self, ctx: typer.Context, formatter: typer.core.HelpFormatter) -> None:
+        """The arguments by name and help, then the options as typer writes them."""
+        params = self.get_params(ctx)
+        rows = [(_argument_name(p), p.help or "") for p in params if isinstance(p, TyperArgument)]
+        options = [
+            record
+            for p in params
+            if not isinstance(p, TyperArgument) and (record := p.get_help_record(ctx))
+        ]
+        for title, entries in (("Arguments", rows), ("Options", options)):
+            if entries:
+                with formatter.section(title):
+                    formatter.write_dl(entries)
+
+
+def _argument_name(param: TyperArgument) -> str:
+    return param.metavar or (param.name or "").upper()
+
 
 app = typer.Typer(
     name="simmer",
@@ -26,6 +59,7 @@ app = typer.Typer(
     no_args_is_help=False,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help as written: [u0] stays, no boxes, no <bool>
 )
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
@@ -51,8 +85,19 @@ ConfigArg = Annotated[
         help="Configuration file (.toml, or a SimMeR config.py). Default: the built-in lab maze "
         "and rover.",
         show_default=False,
+        metavar="CONFIG",
     ),
 ]
+RunFolder = Annotated[
+    Path, typer.Argument(help="A run folder (simmer run --record DIR).", metavar="DIR")
+]
+
+
+def _example(*lines: str) -> str:
+    """A help page's example block, printed as written (click does not re-wrap a paragraph
+    that starts with \\b)."""
+    return "\b\nExample:\n" + "\n".join(f"  {line}" for line in lines)
+
 
 
 def _print_version(wanted: bool) -> None:
@@ -98,12 +143,18 @@ def _report_config_warnings(config: SimConfig) -> None:
         err.print(f"  {issue.render(config.source)}", markup=False, style="yellow")
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Check a configuration: OK and a summary, or every problem.",
+    epilog=_example("simmer check my_rover.toml"),
+)
 def check(
-    config: Annotated[Path, typer.Argument(help="Configuration file to check.")],
+    config: Annotated[
+        Path, typer.Argument(help="Configuration file to check.", metavar="CONFIG")
+    ],
 ) -> None:
     """Check a configuration and call each device once: print OK and a summary, or every
-    problem found (exit status 1)."""
+    problem found, each with its file, line, key and fix (exit status 1)."""
     try:
         loaded = load_config(config)
     except ConfigError as exc:
@@ -121,9 +172,15 @@ def check(
     out.print(summarize(loaded), markup=False)
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="List every configuration key and device setting.",
+    epilog=_example("simmer keys --markdown > keys.md"),
+)
 def keys(
-    markdown: Annotated[bool, typer.Option(help="Print the reference as Markdown.")] = False,
+    markdown: Annotated[
+        bool, typer.Option("--markdown", help="Print the reference as Markdown.")
+    ] = False,
 ) -> None:
     """List every configuration key and device setting, with defaults."""
     from simmer.config.reference import reference_markdown
@@ -138,12 +195,19 @@ def keys(
         out.print(Markdown("\n".join(lines)))
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Run the simulator: a window, or headless; your program too.",
+    epilog=_example(
+        'simmer run my_rover.toml --headless --program "python dead_reckoning.py"'
+    ),
+)
 def run(
     config: ConfigArg = None,
-    headless: Annotated[bool, typer.Option(help="Run without a window.")] = False,
+    headless: Annotated[bool, typer.Option("--headless", help="Run without a window.")] = False,
     seconds: Annotated[
-        float | None, typer.Option(help="Stop after this many simulated seconds.")
+        float | None,
+        typer.Option(help="Stop after this many simulated seconds.", metavar="SECONDS"),
     ] = None,
     speed: Annotated[
         str | None,
@@ -152,14 +216,19 @@ def run(
             "headless --program run). Without the lockstep clock, results at 'max' depend on "
             "the machine.",
             show_default=False,
+            metavar="SPEED",
         ),
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="Noise seed (overrides the configuration's).")
+        int | None,
+        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N"),
     ] = None,
     host: Annotated[
         str | None,
-        typer.Option(help="Address to listen on (default: the configuration's, 127.0.0.1)."),
+        typer.Option(
+            help="Address to listen on (default: the configuration's, 127.0.0.1).",
+            metavar="ADDRESS",
+        ),
     ] = None,
     port_rx: Annotated[
         int | None,
@@ -168,6 +237,7 @@ def run(
             "0: any free port).",
             min=0,
             max=65535,
+            metavar="PORT",
         ),
     ] = None,
     port_tx: Annotated[
@@ -177,25 +247,32 @@ def run(
             "0: any free port).",
             min=0,
             max=65535,
+            metavar="PORT",
         ),
     ] = None,
     port: Annotated[
         int | None,
         typer.Option(
-            help="Persistent protocol port (default 61202; 0: any free port).", min=0, max=65535
+            help="Persistent protocol port (default 61202; 0: any free port).",
+            min=0,
+            max=65535,
+            metavar="PORT",
         ),
     ] = None,
     serial: Annotated[
-        bool, typer.Option(help="Also serve a virtual serial port (a pseudo-terminal).")
+        bool,
+        typer.Option("--serial", help="Also serve a virtual serial port (a pseudo-terminal)."),
     ] = False,
     serial_link: Annotated[
-        Path | None, typer.Option(help="Make a stable link to the serial port at this path.")
+        Path | None,
+        typer.Option(help="Make a stable link to the serial port at this path.", metavar="PATH"),
     ] = None,
     protocol: Annotated[
         Protocol | None,
         typer.Option(
             help="What the two-port scheme and the serial port speak (default: the "
-            "configuration's; a SimMeR v1.2 config.py says framed)."
+            "configuration's; a SimMeR v1.2 config.py says framed).",
+            metavar="packed|framed",
         ),
     ] = None,
     reply_bytes: Annotated[
@@ -205,6 +282,7 @@ def run(
             "configuration's; a v1.0 config.py says 8).",
             min=4,
             max=8,
+            metavar="4|8",
         ),
     ] = None,
     program: Annotated[
@@ -213,6 +291,7 @@ def run(
             help='Start this control program (e.g. "python my_robot.py") on free ports and '
             "end the run when it exits; its clock follows simulated time (lockstep).",
             show_default=False,
+            metavar="COMMAND",
         ),
     ] = None,
     clock: Annotated[
@@ -222,6 +301,7 @@ def run(
             "when the program sleeps (and per message), so runs repeat exactly (default: "
             "lockstep with --program, else realtime).",
             show_default=False,
+            metavar="realtime|lockstep",
         ),
     ] = None,
     link_delay: Annotated[
@@ -230,6 +310,7 @@ def run(
             help="Lockstep: simulated seconds each message costs (default: one step).",
             min=0,
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     timeout: Annotated[
@@ -239,6 +320,7 @@ def run(
             "wall-clock seconds; exit status 124.",
             min=0,
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     record: Annotated[
@@ -247,16 +329,22 @@ def run(
             help="Record the run into this folder (a new one): manifest.json, events.jsonl, "
             "trace.csv, report.json and report.md.",
             show_default=False,
+            metavar="DIR",
         ),
     ] = None,
     video: Annotated[
         Path | None,
         typer.Option(
             help="Record what the window shows into this .mp4 (H.264) or .gif file, at 30 "
-            "frames per simulated second, with or without a window.",
+            "frames per simulated second, with or without a window; an existing file is kept "
+            "unless --force.",
             show_default=False,
+            metavar="FILE",
         ),
     ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Let --video replace an existing file.")
+    ] = False,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -418,12 +506,20 @@ def _serve_failure(exc: OSError, host: str) -> str:
     return f"cannot serve: {exc}"
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Convert a SimMeR config.py to the native TOML format.",
+    epilog=_example("simmer convert config.py -o my_rover.toml"),
+)
 def convert(
-    config: Annotated[Path, typer.Argument(help="A SimMeR config.py to convert.")],
+    config: Annotated[
+        Path, typer.Argument(help="A SimMeR config.py to convert.", metavar="CONFIG")
+    ],
     output: Annotated[
         Path | None,
-        typer.Option("--output", "-o", help="TOML file to write (default: print it)."),
+        typer.Option(
+            "--output", "-o", help="TOML file to write (default: print it).", metavar="FILE"
+        ),
     ] = None,
 ) -> None:
     """Convert a SimMeR config.py to the native TOML format, keeping its comments."""
@@ -440,10 +536,12 @@ def convert(
         out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
 
 
-@app.command()
-def plot(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
-) -> None:
+@app.command(
+    cls=_Command,
+    short_help="Draw a recorded run: path.png and sensors.png.",
+    epilog=_example("simmer plot runs/bias"),
+)
+def plot(folder: RunFolder) -> None:
     """Draw a recorded run into its folder: path.png (the path over the maze, commands
     numbered, collisions marked) and sensors.png (readings against time); report.md links
     them."""
@@ -479,9 +577,13 @@ def _load_recording(folder: Path) -> Recording:
     return recording
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Replay a recorded run in a window (or --check it).",
+    epilog=_example("simmer replay runs/bias"),
+)
 def replay(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    folder: RunFolder,
     check: Annotated[
         bool,
         typer.Option(
@@ -508,9 +610,13 @@ def replay(
         raise typer.Exit(1) from None
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Cut a clip of a recorded run into a video (.mp4 or .gif).",
+    epilog=_example("simmer render runs/manual --from 5 --to 20 -o manual_clip.mp4"),
+)
 def render(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    folder: RunFolder,
     output: Annotated[
         Path | None,
         typer.Option(
@@ -518,6 +624,7 @@ def render(
             "--output",
             help="The clip: .mp4 (H.264) or .gif (default: replay.mp4 in the run folder).",
             show_default=False,
+            metavar="FILE",
         ),
     ] = None,
     start: Annotated[
@@ -526,6 +633,7 @@ def render(
             "--from",
             help="Start, in seconds from the start of the run (default: its start).",
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     end: Annotated[
@@ -534,6 +642,7 @@ def render(
             "--to",
             help="End, in seconds from the start of the run (default: its end).",
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
 ) -> None:
@@ -560,32 +669,47 @@ class Engine(StrEnum):
     dask = "dask"
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Run a program over seeds and settings: success rates.",
+    epilog=_example("simmer sweep sweep_dead_reckoning.toml --workers 2"),
+)
 def sweep(
-    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (.toml).")],
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (.toml).", metavar="SWEEP")],
     output: Annotated[
         Path | None,
         typer.Option(
             "-o",
             "--output",
-            help="Folder for results.csv and summary.md "
-            "(default: SWEEP-results beside the sweep file)",
+            help="Folder for results.csv and summary.md (default: SWEEP-results in the current "
+            "folder, SWEEP being the sweep file's name without .toml).",
             show_default=False,
+            metavar="DIR",
         ),
     ] = None,
     workers: Annotated[
         int | None,
-        typer.Option(help="Worker processes (default: one per core).", min=1, show_default=False),
+        typer.Option(
+            help="Worker processes (default: one per core).",
+            min=1,
+            show_default=False,
+            metavar="N",
+        ),
     ] = None,
     resume: Annotated[
-        bool, typer.Option(help="Keep the runs already in results.csv; run only the others.")
+        bool,
+        typer.Option("--resume", help="Keep the runs already in results.csv; run only the others."),
     ] = False,
-    engine: Annotated[Engine, typer.Option(help="Where runs go: local processes or Dask.")] = (
-        Engine.local
-    ),
+    engine: Annotated[
+        Engine,
+        typer.Option(help="Where runs go: local processes or Dask.", metavar="local|dask"),
+    ] = Engine.local,
     address: Annotated[
         str | None,
-        typer.Option(help="Dask scheduler (tcp://host:8786); none: a local Dask cluster."),
+        typer.Option(
+            help="Dask scheduler (tcp://host:8786); none: a local Dask cluster.",
+            metavar="ADDRESS",
+        ),
     ] = None,
 ) -> None:
     """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
@@ -598,7 +722,7 @@ def sweep(
     except (SweepError, RuntimeError) as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
-    folder = output or sweep_file.parent / f"{sweep_file.stem}-results"
+    folder = output or Path(f"{sweep_file.stem}-results")  # the student's folder, not the file's
     try:
         done = run_sweep(
             spec,
@@ -625,22 +749,35 @@ def sweep(
     )
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Type commands (u0, w0-6) and see the replies.",
+    epilog=_example("simmer console          (then type u0,u1,u2,u3 or w0-6; help lists them)"),
+)
 def console(
-    host: Annotated[str, typer.Option(help="Simulator address.")] = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = STREAM_PORT,
+    host: Annotated[str, typer.Option(help="Simulator address.", metavar="ADDRESS")] = (
+        "127.0.0.1"
+    ),
+    port: Annotated[
+        int, typer.Option(help="Persistent protocol port.", metavar="PORT")
+    ] = STREAM_PORT,
     two_port: Annotated[
-        bool, typer.Option(help="Use SimMeR's two-port scheme (61200/61201) instead.")
+        bool,
+        typer.Option("--two-port", help="Use SimMeR's two-port scheme (61200/61201) instead."),
     ] = False,
     serial: Annotated[
-        str | None, typer.Option(help="Talk to a serial port (virtual or the robot's) instead.")
+        str | None,
+        typer.Option(
+            help="Talk to a serial port (virtual or the robot's) instead.", metavar="PORT"
+        ),
     ] = None,
-    baud: Annotated[int, typer.Option(help="Serial baud rate.")] = 9600,
+    baud: Annotated[int, typer.Option(help="Serial baud rate.", metavar="BAUD")] = 9600,
     framed: Annotated[
         bool,
         typer.Option(
+            "--framed",
             help="Speak SimMeR v1.2's framed text ([u0] -> [u0:15.45]) over the two-port "
-            "scheme or --serial, as a simulator with protocol = 'framed' (a v1.2 config.py) does."
+            "scheme or --serial, as a simulator with protocol = 'framed' (a v1.2 config.py) does.",
         ),
     ] = False,
 ) -> None:
