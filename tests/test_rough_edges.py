@@ -272,7 +272,8 @@ def test_the_start_up_summary_shows_the_ports_in_use() -> None:
          "--port-rx", str(rx), "--port-tx", str(tx), "--port", str(stream)],
     )  # fmt: skip
     assert result.exit_code == 0, result.output
-    assert f"SimMeR TCP on 127.0.0.1:{rx}/{tx}" in result.output
+    assert f"127.0.0.1 rx {rx}, tx {tx}" in result.output
+    assert f"port {stream}" in result.output
     assert "61200" not in result.output
 
 

@@ -145,6 +145,33 @@ def _report_config_warnings(config: SimConfig) -> None:
 
 @app.command(
     cls=_Command,
+    short_help="Make a folder of your own for Lab 1 (rover, programs, sweeps).",
+    epilog=_example("simmer new lab1", "cd lab1", "simmer check my_rover.toml"),
+)
+def new(
+    folder: Annotated[
+        Path, typer.Argument(help="The folder to make (new, or empty).", metavar="DIR")
+    ],
+) -> None:
+    """Make a folder of your own for Lab 1: the lab's rover (my_rover.toml), the example
+    programs, two sweep files and a README pointing at the lab page, whose every command runs
+    from this folder."""
+    from simmer.newfolder import FolderExists, lab_page, new_folder
+
+    try:
+        written = new_folder(folder)
+    except (FolderExists, OSError) as exc:
+        err.print(f"cannot make the folder: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"made {folder}: {', '.join(path.name for path in written)}", markup=False)
+    out.print(
+        f"next: cd {folder}, then simmer check my_rover.toml; the lab page: {lab_page()}",
+        markup=False,
+    )
+
+
+@app.command(
+    cls=_Command,
     short_help="Check a configuration: OK and a summary, or every problem.",
     epilog=_example("simmer check my_rover.toml"),
 )
@@ -155,6 +182,8 @@ def check(
 ) -> None:
     """Check a configuration and call each device once: print OK and a summary, or every
     problem found, each with its file, line, key and fix (exit status 1)."""
+    from simmer.config import load_config, summarize
+
     try:
         loaded = load_config(config)
     except ConfigError as exc:
@@ -351,6 +380,7 @@ def run(
     With --program, the run ends when the program exits (with its exit status), at --seconds
     of simulated time (status 3) or at --timeout wall seconds (status 124).
     """
+    from simmer.config import load_config, summarize
     from simmer.serve import parse_speed
     from simmer.world import Simulation
 
@@ -392,8 +422,7 @@ def run(
     _report_config_warnings(loaded)
     if loaded.origin:
         out.print(loaded.origin, markup=False)
-    out.print(summarize(sim.config), markup=False)
-    out.print(f"noise seed {sim.seed}", markup=False)
+    out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
