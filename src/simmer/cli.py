@@ -183,6 +183,7 @@ def check(
     """Check a configuration and call each device once: print OK and a summary, or every
     problem found, each with its file, line, key and fix (exit status 1)."""
     from simmer.config import load_config, summarize
+    from simmer.config.loader import placed_issues
 
     try:
         loaded = load_config(config)
@@ -195,7 +196,7 @@ def check(
     from simmer.config.probe import probe_devices
 
     if issues := probe_devices(loaded):
-        _report_config_error(ConfigError(config, issues))
+        _report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
@@ -406,9 +407,12 @@ def run(
         "port_rx": port_rx or None,  # 0 is no setting: the transport lines say which port
         "port_tx": port_tx or None,
     }
+    given = {key: value for key, value in overrides.items() if value is not None}
+    flags = " ".join(f"--{key.replace('_', '-')} {value}" for key, value in given.items())
     try:
         loaded = load_config(config)
-        loaded = loaded.with_settings(**{k: v for k, v in overrides.items() if v is not None})
+        if given:  # checked as the file's own settings are (port_rx == port_tx ...)
+            loaded = loaded.with_settings(f"{loaded.source} with {flags}", **given)
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None

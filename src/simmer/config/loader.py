@@ -17,7 +17,7 @@ from pydantic import BaseModel
 
 from simmer.config import simmer_py
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
-from simmer.config.toml_errors import toml_issue
+from simmer.config.toml_errors import toml_issue, with_lines
 from simmer.config.validate import ORIGINAL_RUNS, config_from_dict
 from simmer.errors import ConfigError, ConfigIssue
 
@@ -38,6 +38,7 @@ __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here f
     "describe_replies",
     "load_config",
     "noisy_devices",
+    "placed_issues",
     "read_config_data",
     "summarize",
 ]
@@ -110,6 +111,16 @@ def _unreadable_as_config_error(path: Path) -> Iterator[None]:
         raise ConfigError(path, [ConfigIssue("", message)]) from None
 
 
+def placed_issues(path: str | Path, issues: list[ConfigIssue]) -> list[ConfigIssue]:
+    """Problems found in a loaded TOML file (a device failing its first call) with the line
+    of each key, as validation's have them."""
+    path = Path(path)
+    if path.suffix == ".py" or not path.is_file():
+        return issues
+    with _unreadable_as_config_error(path):
+        return with_lines(issues, path.read_text(encoding="utf-8"))
+
+
 @cache
 def default_config() -> SimConfig:
     """The built-in default: SimMeR's maze, block and start pose with the lab rover, noise off."""
@@ -123,7 +134,11 @@ def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
     A file that is not TOML gets one issue in plain words, with its line (a key or table
     written twice names both lines: :mod:`simmer.config.toml_errors`).
     """
-    return config_from_dict(_toml_data(text, source), source, base_dir)
+    data = _toml_data(text, source)
+    try:
+        return config_from_dict(data, source, base_dir)
+    except ConfigError as exc:
+        raise ConfigError(source, with_lines(exc.issues, text)) from None
 
 
 def _toml_data(text: str, source: str) -> dict[str, Any]:

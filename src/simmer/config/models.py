@@ -247,10 +247,13 @@ class SimConfig:
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
 
-    def with_settings(self, **updates: Any) -> SimConfig:
-        """The same configuration with some settings replaced (validated), e.g. from the CLI."""
-        settings = Settings.model_validate({**self.settings.model_dump(), **updates})
-        return replace(self, settings=settings)
+    def with_settings(self, source: str | None = None, **updates: Any) -> SimConfig:
+        """The same configuration with some settings replaced, e.g. from the command line,
+        checked as a file's settings are (:func:`simmer.config.validate.with_settings`); a
+        :class:`~simmer.errors.ConfigError` names ``source`` (default: the configuration's)."""
+        from simmer.config.validate import with_settings
+
+        return with_settings(self, updates, source or self.source)
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""
