@@ -81,7 +81,7 @@ def test_problems_in_several_tables_come_in_the_files_order(tmp_path: Path) -> N
     path, text = edited(
         tmp_path,
         ("[sensors.u0]\n", "[sensors.u0]\nbeamwith = 3\n"),
-        ('motors = ["m0", "m1"]\nmotor_direction = [1, 1]\n', 'motors = ["m0", "m9"]\nmotor_direction = [1, 1]\n'),
+        ('motors = ["m0", "m1"]', 'motors = ["m0", "m9"]'),
         ("simulate_list = [", "frame_rate = -1\nsimulate_list = ["),
     )  # fmt: skip
     status, lines = check(path)

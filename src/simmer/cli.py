@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
+from typer import _click  # the click typer ships: its Command is what a command overrides
 from typer.core import TyperArgument, TyperCommand
 
 from simmer.errors import ConfigError
@@ -21,11 +22,12 @@ if TYPE_CHECKING:
     from simmer.config import SimConfig
     from simmer.ui.replay_model import Recording
 
+
 class _Command(TyperCommand):
     """A command whose help shows arguments as ``CONFIG`` / ``[CONFIG]`` with their help, as
     click does (typer writes ``{config}`` and ``<path>``)."""
 
-    def collect_usage_pieces(self, ctx: typer.Context) -> list[str]:
+    def collect_usage_pieces(self, ctx: _click.Context) -> list[str]:
         """``[OPTIONS] CONFIG``: an optional argument in brackets, a required one bare."""
         pieces = [self.options_metavar] if self.options_metavar else []
         for param in self.get_params(ctx):
@@ -34,7 +36,7 @@ class _Command(TyperCommand):
                 pieces.append(name if param.required else f"[{name}]")
         return pieces
 
-    def format_options(self, ctx: typer.Context, formatter: typer.core.HelpFormatter) -> None:
+    def format_options(self, ctx: _click.Context, formatter: _click.HelpFormatter) -> None:
         """The arguments by name and help, then the options as typer writes them."""
         params = self.get_params(ctx)
         rows = [(_argument_name(p), p.help or "") for p in params if isinstance(p, TyperArgument)]
@@ -97,7 +99,6 @@ def _example(*lines: str) -> str:
     """A help page's example block, printed as written (click does not re-wrap a paragraph
     that starts with \\b)."""
     return "\b\nExample:\n" + "\n".join(f"  {line}" for line in lines)
-
 
 
 def _print_version(wanted: bool) -> None:
@@ -176,9 +177,7 @@ def new(
     epilog=_example("simmer check my_rover.toml"),
 )
 def check(
-    config: Annotated[
-        Path, typer.Argument(help="Configuration file to check.", metavar="CONFIG")
-    ],
+    config: Annotated[Path, typer.Argument(help="Configuration file to check.", metavar="CONFIG")],
 ) -> None:
     """Check a configuration and call each device once: print OK and a summary, or every
     problem found, each with its file, line, key and fix (exit status 1)."""
@@ -228,9 +227,7 @@ def keys(
 @app.command(
     cls=_Command,
     short_help="Run the simulator: a window, or headless; your program too.",
-    epilog=_example(
-        'simmer run my_rover.toml --headless --program "python dead_reckoning.py"'
-    ),
+    epilog=_example('simmer run my_rover.toml --headless --program "python dead_reckoning.py"'),
 )
 def run(
     config: ConfigArg = None,
@@ -393,7 +390,7 @@ def run(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
     if video is not None:
-        _check_video(video)
+        _check_video(video, force=force)
     if program is not None:  # this run's own free ports, so that runs can share a machine
         port_rx = 0 if port_rx is None else port_rx
         port_tx = 0 if port_tx is None else port_tx
@@ -482,15 +479,23 @@ def run(
     raise typer.Exit(served.exit_status)
 
 
-def _check_video(path: Path) -> None:
-    """Refuse a video file that cannot be written before any port opens; make its folder if
-    it is missing (as --record does: ``--video runs/task1.mp4`` in a new project)."""
+def _check_video(path: Path, *, force: bool) -> None:
+    """Refuse a video file that cannot be written, or that exists unless ``force``, before any
+    port opens; make its folder if it is missing (as --record does: ``--video runs/task1.mp4``
+    in a new project)."""
     from simmer.ui.video import check_video_path
 
     try:
         check_video_path(path)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--video") from None
+    if path.exists() and not force:
+        err.print(
+            f"the video {path} exists already: give another name, or add --force to replace it",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)
     folder = path.parent
     with contextlib.suppress(OSError):  # said just below, as for a folder not writable
         folder.mkdir(parents=True, exist_ok=True)

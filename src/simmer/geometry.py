@@ -14,12 +14,13 @@ so rays walk the grid cell by cell (Amanatides & Woo); a read therefore costs th
 from __future__ import annotations
 
 import math
+
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from simmer.pose import Pose as Pose
-from simmer.pose import Vec2
+from simmer.pose import Pose as Pose  # noqa: PLC0414  (re-exported: plug-ins import it here)
+from simmer.pose import Vec2 as Vec2  # noqa: PLC0414
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

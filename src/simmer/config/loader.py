@@ -211,7 +211,9 @@ def describe_noise(config: SimConfig, seed: int | None = None) -> str:
     else:
         configured = s.floor_seed if s.seed is None else s.seed
         draw = f"repeatable, seed {configured if seed is None else seed}"
-    drawn = f"; drive biases drawn at start (strength {list(s.bias_strength)})" if s.rand_bias else ""
+    drawn = (
+        f"; drive biases drawn at start (strength {list(s.bias_strength)})" if s.rand_bias else ""
+    )
     return f"{devices}; {draw}{drawn}"
 
 

@@ -14,7 +14,7 @@ The table name is the device id. Motors default to ``type = "motor"``, drives to
 from __future__ import annotations
 
 import codecs
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator

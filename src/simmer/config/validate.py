@@ -108,8 +108,9 @@ def with_settings(config: SimConfig, updates: dict[str, Any], source: str) -> Si
         settings = Settings.model_validate({**config.settings.model_dump(), **updates})
     except ValidationError as exc:
         raise ConfigError(source, _issues_from_validation(exc, "", Settings)) from None
-    declared = {
-        group: [spec.id for spec in config.devices if spec.group == group] for group in DEVICE_GROUPS
+    declared: dict[str, list[str]] = {
+        group: [spec.id for spec in config.devices if spec.group == group]
+        for group in DEVICE_GROUPS
     }
     found = _Found(original=bool(config.origin))  # its warnings were said when it was loaded
     issues = found.errors
