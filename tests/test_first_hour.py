@@ -118,11 +118,31 @@ def test_the_command_list_says_each_command_in_one_whole_line() -> None:
     assert not any(line.rstrip().endswith("...") for line in lines)
 
 
-def test_the_cli_and_the_event_types_load_no_compiler() -> None:
+HEAVY = ("numba", "numpy", "pygame", "pydantic", "matplotlib", "av")
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["sweep"]])
+def test_help_loads_nothing_heavy(command: list[str]) -> None:
     probe = (
-        "import sys, simmer.cli, simmer.world.events, simmer.client;"
-        "print(sorted(m for m in ('numba', 'numpy', 'pygame', 'pydantic', 'matplotlib') "
-        "if m in sys.modules))"
+        "import sys\n"
+        "from simmer.cli import app\n"
+        "try:\n"
+        f"    app({[*command, '--help']!r}, prog_name='simmer')\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        f"print(sorted(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert "Usage: simmer" in done.stdout
+    assert done.stderr.strip() == "[]"
+
+
+def test_the_event_types_and_the_client_load_no_compiler() -> None:
+    probe = (
+        "import sys, simmer.world.events, simmer.client;"
+        f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))"
     )
     done = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=60
