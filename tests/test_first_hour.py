@@ -91,6 +91,20 @@ def test_simmer_new_changes_nothing_in_a_folder_with_files(tmp_path: Path) -> No
     assert len(new_folder(tmp_path / "empty")) == 6  # an empty folder is fine
 
 
+def test_simmer_new_copies_only_the_templates_files(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An installed package has a __pycache__ beside the example programs: not copied."""
+    package = tmp_path / "package"
+    template = package / "data" / "new"
+    (template / "__pycache__").mkdir(parents=True)
+    (template / "README.md").write_text("see {lab_page}", encoding="utf-8")
+    monkeypatch.setattr("simmer.newfolder.files", lambda _: package)
+    written = new_folder(tmp_path / "lab1")
+    assert [path.name for path in written] == ["README.md"]
+    assert "{lab_page}" not in written[0].read_text(encoding="utf-8")
+
+
 # ----------------------------------------------------------------------------- help pages
 
 

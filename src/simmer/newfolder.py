@@ -41,7 +41,10 @@ def new_folder(destination: Path) -> list[Path]:
         )
     destination.mkdir(parents=True, exist_ok=True)
     written = []
-    for source in sorted(files("simmer").joinpath(TEMPLATE).iterdir(), key=lambda f: f.name):
+    template = files("simmer").joinpath(TEMPLATE)
+    for source in sorted(template.iterdir(), key=lambda f: f.name):
+        if not source.is_file():
+            continue  # __pycache__, made when an install compiles the example programs
         text = source.read_text(encoding="utf-8")
         if source.name == "README.md":
             text = text.replace("{lab_page}", lab_page())
