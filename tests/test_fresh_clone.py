@@ -47,6 +47,46 @@ def test_the_set_up_knows_each_platforms_layout(tmp_path: Path) -> None:
         assert line in README
 
 
+def test_the_set_up_installs_only_when_needed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    setup = load_setup()
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    pyproject = repo / "pyproject.toml"
+    pyproject.write_text("[project]\nname = 'simmer'\n", encoding="utf-8")
+    monkeypatch.setattr(setup, "REPO", repo)
+    calls: list[list[str]] = []
+
+    def fake_run(args: list[object], **_: object) -> subprocess.CompletedProcess[bytes]:
+        """Log the command; make the environment's python when asked for a venv; say that
+        pygame (not pygame-ce) is not installed."""
+        words = [str(arg) for arg in args]
+        calls.append(words)
+        if words[1:3] == ["-m", "venv"]:
+            python = setup.venv_python(Path(words[3]), os.name == "nt")
+            python.parent.mkdir(parents=True, exist_ok=True)
+            python.touch()
+        missing = "version('pygame')" in words[-1]
+        return subprocess.CompletedProcess(args, 1 if missing else 0, b"", b"")
+
+    monkeypatch.setattr(setup.subprocess, "run", fake_run)
+
+    def installs(*argv: str) -> list[str]:
+        calls.clear()
+        assert setup.main(["--venv", str(tmp_path / "venv"), *argv]) == 0
+        return [call[-1] for call in calls if "install" in call]
+
+    assert installs() == ["pip", str(repo)]  # a fresh clone: pip, then SimMeR
+    assert "source" in capsys.readouterr().out  # the activation line, once
+    assert installs() == []  # nothing changed: straight to work
+    assert capsys.readouterr().out == ""
+    assert installs("--test") == ["pip", f"{repo}[test]"]  # the test tools are another stamp
+    later = pyproject.stat().st_mtime + 10
+    os.utime(pyproject, (later, later))
+    assert installs() == ["pip", str(repo)]  # pyproject.toml changed
+
+
 def on_the_page(command: str, page: str) -> str:
     """``command``, after checking that ``page`` has it word for word."""
     assert command in page, f"{command!r} is no longer on the page: update this test"

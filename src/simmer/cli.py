@@ -391,7 +391,7 @@ def run(
     With --program, the run ends when the program exits (with its exit status), at --seconds
     of simulated time (status 3) or at --timeout wall seconds (status 124).
     """
-    from simmer.config import load_config, summarize
+    from simmer.config import load_config, summarize, with_settings
     from simmer.serve import parse_speed
     from simmer.world import Simulation
 
@@ -422,7 +422,7 @@ def run(
     try:
         loaded = load_config(config)
         if given:  # checked as the file's own settings are (port_rx == port_tx ...)
-            loaded = loaded.with_settings(f"{loaded.source} with {flags}", **given)
+            loaded = with_settings(loaded, given, f"{loaded.source} with {flags}")
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import codecs
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
@@ -246,14 +246,6 @@ class SimConfig:
     origin: str = ""
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
-
-    def with_settings(self, source: str | None = None, **updates: Any) -> SimConfig:
-        """The same configuration with some settings replaced, e.g. from the command line,
-        checked as a file's settings are (:func:`simmer.config.validate.with_settings`); a
-        :class:`~simmer.errors.ConfigError` names ``source`` (default: the configuration's)."""
-        from simmer.config.validate import with_settings
-
-        return with_settings(self, updates, source or self.source)
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""

@@ -100,10 +100,14 @@ def config_from_dict(
     return SimConfig(settings, tuple(devices), source, tuple(found.warnings))
 
 
-def with_settings(config: SimConfig, updates: dict[str, Any], source: str) -> SimConfig:
+def with_settings(
+    config: SimConfig, updates: dict[str, Any], source: str | None = None
+) -> SimConfig:
     """``config`` with some settings replaced (the command line's ``--port-rx`` ...), checked
     by the same model and cross-checks as a file's settings, so that two equal ports are refused
-    before any port opens; every problem in a :class:`ConfigError` naming ``source``."""
+    before any port opens: the one route for changing a loaded configuration's settings. Every
+    problem is in a :class:`ConfigError` naming ``source`` (default: the configuration's)."""
+    source = source or config.source
     try:
         settings = Settings.model_validate({**config.settings.model_dump(), **updates})
     except ValidationError as exc:
