@@ -42,7 +42,7 @@ def test_three_problems_in_one_table_are_three_lines_each_with_its_line(tmp_path
     path, text = edited(
         tmp_path,
         ('motors = ["m0", "m1"]\nmotor_direction = [1, 1]\n',
-         'motors = ["m0", "m2"]\nmotor_directon = [1, 1]\nvelocty = 3\n'),
+         'motors = ["m0", "m2"]\nmotor_direction = [1, 1]\nmotor_directon = [1, 1]\nvelocty = 3\n'),
     )  # fmt: skip
     status, lines = check(path)
     motors = line_of(text, 'motors = ["m0", "m2"]')
@@ -55,6 +55,25 @@ def test_three_problems_in_one_table_are_three_lines_each_with_its_line(tmp_path
         f"  {path}:{line_of(text, 'velocty')}: drives.w0.velocty: unknown key (did you mean "
         "'velocity'?); check its spelling or delete it",
     ]
+
+
+def test_an_unknown_key_does_not_hide_a_mistake_between_settings(tmp_path: Path) -> None:
+    path, _ = edited(
+        tmp_path,
+        ("motor_direction = [1, 1]\n", "motor_direction = [1]\nvelocty = 3\n"),
+        ("[sensors.u0]\n", "[sensors.u0]\nbeamwith = 3\nmin_range = 500\n"),  # past max_range
+    )  # fmt: skip
+    status, lines = check(path)
+    assert status == 1
+    shown = [line.split(": ", 2)[1:] for line in lines[1:]]
+    assert [key for key, _ in shown] == [
+        "drives.w0.motor_direction",
+        "drives.w0.velocty",
+        "sensors.u0.max_range",  # not written: the line of its table
+        "sensors.u0.beamwith",
+    ]
+    assert shown[0][1].startswith("has 1 entries but motors has 2")
+    assert shown[2][1] == "must be greater than min_range (500), got 433"
 
 
 def test_a_value_mistake_has_its_line(tmp_path: Path) -> None:

@@ -340,6 +340,18 @@ def _validate_device(
         params = kind.Params.model_validate(raw, context={"base_dir": base_dir})
     except ValidationError as exc:
         issues += _issues_from_validation(exc, key, kind.Params)
+        errors = exc.errors()
+        unknown = {
+            e["loc"][0] for e in errors if e["type"] == "extra_forbidden" and len(e["loc"]) == 1
+        }
+        if len(unknown) < len(errors):
+            return None
+        try:  # only unknown keys: the rest may hold mistakes they must not hide
+            known = {name: value for name, value in raw.items() if name not in unknown}
+            params = kind.Params.model_validate(known, context={"base_dir": base_dir})
+        except ValidationError:
+            return None
+        issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in params.problems()]
         return None
     problems = params.problems()
     issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in problems]
