@@ -25,6 +25,7 @@ from simmer.world.events import (
     ResetEvent,
     StepEvent,
 )
+from simmer.world.zones import project_run
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
@@ -58,11 +59,16 @@ class OutcomeReport:
     commands: int
     nan_replies: int
     final_pose: Pose
+    project: ProjectReport | None = None
+    """The course project's milestones and score (None unless the robot has a gripper and the
+    maze has zones: a Lab 1 run's outcome is as before)."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
         data = asdict(self)
         data["final_pose"] = list(self.final_pose)
+        project = data.pop("project")
+        data.update(project or {})
         return data
 
     def summary(self) -> str:
@@ -77,9 +83,11 @@ class OutcomeReport:
             f" (first at {self.first_collision:.2f} s)" if self.first_collision is not None else ""
         )
         x, y, heading = self.final_pose
+        project = [self.project.summary()] if self.project is not None else []
         return "\n".join(
             [
                 f"outcome after {self.time:.2f} s: {task2}",
+                *project,
                 f"  collisions {self.collisions}{first}, {self.blocked_steps} steps blocked; "
                 f"path {self.path_length:.1f} in",
                 f"  {self.messages} messages, {self.commands} commands, "
@@ -87,6 +95,49 @@ class OutcomeReport:
                 f"heading {heading:.1f} deg",
             ]
         )
+
+
+MILESTONES = ("entered_loading", "picked_up", "left_loading", "delivered")
+"""The project's milestones in the order a run meets them (each has an ``_at`` time)."""
+MILESTONE_WORDS = {
+    "entered_loading": "entered the loading zone",
+    "picked_up": "picked up the block",
+    "left_loading": "left the loading zone holding it",
+    "delivered": "delivered it",
+}
+
+
+@dataclass(frozen=True)
+class ProjectReport:
+    """The course project's milestones (simulated seconds, None if not met) and score."""
+
+    target: str | None
+    entered_loading: bool
+    entered_loading_at: float | None
+    picked_up: bool
+    picked_up_at: float | None
+    left_loading: bool
+    left_loading_at: float | None
+    delivered: bool
+    delivered_at: float | None
+    wrong_zone: str | None
+    """The drop-off zone the block was put down in instead of the target (None if none)."""
+    wrong_zone_at: float | None
+    score: float
+
+    def summary(self) -> str:
+        """One line: milestones with their times, then the score."""
+        met = [
+            f"{MILESTONE_WORDS[name]} at {at:.2f} s"
+            for name in MILESTONES
+            if (at := getattr(self, f"{name}_at")) is not None
+        ]
+        if self.wrong_zone is not None and not self.delivered:
+            met.append(
+                f"put it down in {self.wrong_zone} (not the target) at {self.wrong_zone_at:.2f} s"
+            )
+        said = "; ".join(met) if met else "no milestone"
+        return f"  project (target {self.target or 'none'}): {said}; score {self.score:g}"
 
 
 class Outcome:
@@ -100,6 +151,7 @@ class Outcome:
         self.sim = sim
         robot_radius = float(np.sqrt((sim.robot.outline**2).sum(axis=1)).max())
         self._near = robot_radius + sim.block.size * math.sqrt(0.5) + REACH_DISTANCE
+        self._zoned = project_run(sim.config) and bool(sim.zones.loading or sim.zones.dropoff)
         self._clear()
 
     @classmethod
@@ -120,6 +172,9 @@ class Outcome:
         self.nan_replies = 0
         self._blocked_before = self.sim.blocked_steps
         self._last_pose: Pose = self.sim.robot.pose
+        self.milestones: dict[str, float] = {}
+        self.wrong_zone: tuple[str, float] | None = None
+        self._held = False
 
     def __call__(self, event: Event) -> None:
         """Observe one simulation event."""
@@ -136,7 +191,11 @@ class Outcome:
                 task2 = event.time - self.first_motion
                 log.info("reached the block at %.2f s (Task 2 time %.2f s)", event.time, task2)
                 self.sim.emit(ReachedEvent(event.time, task2, event.step))
+            if self._zoned:
+                self._project(event.time)
         elif isinstance(event, CommandEvent):
+            if self._zoned:
+                self._project(event.time)
             self.messages += 1
             self.commands += len(event.replies)
             self.nan_replies += sum(math.isnan(value) for value in event.replies)
@@ -157,6 +216,58 @@ class Outcome:
             self._last_pose = pose
             self.first_motion = None
             self.reached_at = None
+
+    def _project(self, time: float) -> None:
+        """Note the project's milestones met by now (each once, at its first time)."""
+        sim = self.sim
+        zones = sim.zones
+        met = self.milestones
+        pose = sim.robot.pose
+        inside = zones.in_loading(pose.x, pose.y)
+        if inside and "entered_loading" not in met:
+            met["entered_loading"] = time
+        held = sim.block.held is not None
+        if held and "picked_up" not in met:
+            met["picked_up"] = time
+        if held and not inside and "picked_up" in met and "left_loading" not in met:
+            met["left_loading"] = time
+        if self._held and not held and "delivered" not in met:
+            zone = zones.dropoff_at(sim.block.x, sim.block.y)
+            if zone is not None and zone == sim.scenario.target:
+                met["delivered"] = time
+            elif zone is not None and self.wrong_zone is None:
+                self.wrong_zone = (zone, time)
+        self._held = held
+
+    def project_report(self) -> ProjectReport | None:
+        """The milestones and score so far (None if the maze has no zones)."""
+        if not self._zoned:
+            return None
+        rubric = self.sim.config.settings.score
+        met = {k: t for k, t in self.milestones.items() if t <= rubric.time_limit}
+        delivered = "delivered" in met
+        wrong = (
+            self.wrong_zone if self.wrong_zone and self.wrong_zone[1] <= rubric.time_limit else None
+        )
+        score = sum(getattr(rubric, name) for name in met)
+        if wrong is not None and not delivered:
+            score += rubric.wrong_zone
+        score += rubric.collision * self.collisions
+        at = self.milestones.get
+        return ProjectReport(
+            target=self.sim.scenario.target,
+            entered_loading="entered_loading" in self.milestones,
+            entered_loading_at=at("entered_loading"),
+            picked_up="picked_up" in self.milestones,
+            picked_up_at=at("picked_up"),
+            left_loading="left_loading" in self.milestones,
+            left_loading_at=at("left_loading"),
+            delivered="delivered" in self.milestones,
+            delivered_at=at("delivered"),
+            wrong_zone=self.wrong_zone[0] if self.wrong_zone else None,
+            wrong_zone_at=self.wrong_zone[1] if self.wrong_zone else None,
+            score=round(score, 6),
+        )
 
     def reached(self) -> bool:
         """True if the robot's outline is within :data:`REACH_DISTANCE` of the block now."""
@@ -190,4 +301,5 @@ class Outcome:
             commands=self.commands,
             nan_replies=self.nan_replies,
             final_pose=self.sim.robot.pose,
+            project=self.project_report(),
         )
