@@ -354,9 +354,9 @@ def test_collisions_and_the_time_limit_cost_points() -> None:
         sim.run_until_idle()
     project = outcome.report().project
     assert project is not None and project.delivered
-    assert project.entered_loading_at is not None and project.entered_loading_at < 10
-    assert project.picked_up_at is not None and project.picked_up_at > 10
-    assert project.score == 10 - 5  # only the loading zone came in time; one collision
+    assert project.left_loading_at is not None and project.left_loading_at < 10
+    assert project.delivered_at is not None and project.delivered_at > 10
+    assert project.score == 10 + 20 + 10 - 5  # the delivery came too late; one collision
 
 
 def test_a_lab1_run_has_no_project_in_its_outcome() -> None:
