@@ -257,6 +257,37 @@ def run(
             show_default=False,
         ),
     ] = None,
+    start: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: where the robot starts: a cell 'row,col' or 'row,col,heading', "
+            "'random' (a start cell drawn from the seed), 'open' or 'config'.",
+            show_default=False,
+        ),
+    ] = None,
+    block: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: the block's centre 'x,y' in inches, 'random' (inside the loading "
+            "zone, drawn from the seed) or 'config'.",
+            show_default=False,
+        ),
+    ] = None,
+    target: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: the drop-off zone to deliver to (e.g. B2), or 'random'.",
+            show_default=False,
+        ),
+    ] = None,
+    answer: Annotated[
+        str | None,
+        typer.Option(
+            help='What --program reads at its input() prompt (e.g. the target zone, "B2"); '
+            "'{target}' is replaced by this run's target.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -294,6 +325,7 @@ def run(
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
+    loaded = _with_scenario(loaded, start=start, block=block, target=target)
     try:
         sim = Simulation(loaded, seed=seed)
     except Exception:  # a device's own constructor: say which, as `check` does
@@ -306,6 +338,12 @@ def run(
         out.print(loaded.origin, markup=False)
     out.print(summarize(sim.config), markup=False)
     out.print(f"noise seed {sim.seed}", markup=False)
+    from simmer.world.zones import project_run
+
+    if project_run(loaded):
+        out.print(f"scenario: {sim.scenario.describe()}", markup=False)
+    if answer is not None and sim.scenario.target is not None:
+        answer = answer.replace("{target}", sim.scenario.target)
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
@@ -338,6 +376,7 @@ def run(
             timeout=timeout,
             record=record,
             video=video,
+            answer=answer,
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -359,6 +398,24 @@ def run(
             ended = "the run was stopped"
         out.print(f"run ended: {ended}; log: {log_file}", markup=False)
     raise typer.Exit(served.exit_status)
+
+
+def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
+    """The configuration with --start, --block and --target in its [scenario] (so the manifest
+    and a replay have them); a part that cannot be met is one plain line and exit status 1."""
+    from simmer.config.validate import check_project
+
+    given = {key: value for key, value in parts.items() if value is not None}
+    if not given:
+        return config
+    scenario = {**config.settings.scenario.model_dump(), **given}
+    changed = config.with_settings(scenario=scenario)
+    for issue in check_project(changed.settings):
+        part = issue.key.removeprefix("scenario.")
+        where = f"--{part}" if part in given else issue.key
+        err.print(f"{where}: {issue.message}", style="bold red", markup=False)
+        raise typer.Exit(1)
+    return changed
 
 
 def _check_video(path: Path) -> None:

@@ -6,9 +6,11 @@ Kept out of ``cli.py`` so the window, the headless run and the tests share one p
 from __future__ import annotations
 
 import logging
+import os
 import signal
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
@@ -122,6 +124,7 @@ def serve(
     timeout: float | None = None,
     record: Path | None = None,
     video: Path | None = None,
+    answer: str | None = None,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -130,7 +133,9 @@ def serve(
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
-    with a window or headless, and the file is finished however the run ends.
+    with a window or headless, and the file is finished however the run ends. With ``answer``,
+    the program's standard input is that text, a line, then its end (what a student types at
+    the program's ``input()`` prompt: the project's target zone).
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
     ``record`` folder cannot be written (FileExistsError if it holds a run already), and
@@ -177,7 +182,8 @@ def serve(
                     f"and {runner.link_delay:g} s per message"
                 )
             if program is not None:
-                started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
+                with _standard_input(answer):
+                    started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
                 from simmer.ui import run_window
@@ -225,6 +231,40 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
         echo(f"the video {filming.path} could not be written: {exc}")
     else:
         echo(f"video: {filming.path} ({filming.frames} frames, {filming.seconds:.2f} s)")
+
+
+MAX_ANSWER = 4096
+"""Characters of ``--answer``: a few typed lines, well inside a pipe's buffer (so writing them
+never waits for the program to read)."""
+
+
+@contextmanager
+def _standard_input(answer: str | None) -> Iterator[None]:
+    """While a program starts: this process's standard input is a pipe holding ``answer`` and
+    a newline, then its end, which the program inherits (``Program.start`` passes on the run's
+    own standard input); None leaves it alone."""
+    if answer is None:
+        yield
+        return
+    if len(answer) > MAX_ANSWER:
+        raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
+    read, write = os.pipe()
+    with os.fdopen(write, "w", encoding="utf-8") as pipe:
+        pipe.write(answer + "\n")
+    try:
+        saved: int | None = os.dup(0)
+    except OSError:  # no standard input at all (CI)
+        saved = None
+    os.dup2(read, 0)
+    os.close(read)
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.close(0)
+        else:
+            os.dup2(saved, 0)
+            os.close(saved)
 
 
 def _start_program(

@@ -83,6 +83,12 @@ class ScenarioSettings(BaseModel):
         description="'config': block_position; 'random': a place inside the loading zone clear "
         "of walls, drawn from the seed; or 'x,y' in inches.",
     )
+    block_clearance: float = Field(
+        3.5,
+        ge=0,
+        description="A drawn block keeps this many inches between its sides and every wall, "
+        "so a gripper can reach it and a robot turn beside it (the lab rover needs 3.5).",
+    )
     target: str = Field(
         "random",
         description="The drop-off zone to deliver to: a zone's name, or 'random' (drawn).",

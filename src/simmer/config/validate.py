@@ -94,7 +94,7 @@ def config_from_dict(
         issues += maze_issues + _check_references(settings, declared)
         if not (oversize or maze_issues):  # the placement check builds the maze
             _check_placement(settings, found)
-            issues += _check_project(settings)
+            issues += check_project(settings)
     if issues:
         raise ConfigError(source, issues)
     assert settings is not None
@@ -510,7 +510,7 @@ def _check_placement(settings: Settings, found: _Found) -> None:
         )
 
 
-def _check_project(settings: Settings) -> list[ConfigIssue]:
+def check_project(settings: Settings) -> list[ConfigIssue]:
     """Zones on open cells of the maze, and a scenario that can be met (its start cell, block
     place and target zone), each mistake named by its key."""
     from simmer.world.maze import Maze

@@ -202,10 +202,16 @@ def _block(
     robot = robot_outline(settings)
     placed_robot = np.empty_like(robot)
     place_polygon(robot, start.x, start.y, start.heading, placed_robot)
-    square = rectangle(settings.block_size, settings.block_size)
+    size = settings.block_size
+    square = rectangle(size, size)
     block = np.empty_like(square)
 
-    def clear(x: float, y: float) -> bool:
+    def clear(x: float, y: float, clearance: float = 0.0) -> bool:
+        if clearance:
+            room = rectangle(size + 2 * clearance, size + 2 * clearance)
+            place_polygon(room, x, y, settings.block_rotation, block)
+            if polygon_hits_grid(block, maze.hwall, maze.vwall, maze.solid, maze.cell):
+                return False
         place_polygon(square, x, y, settings.block_rotation, block)
         hits = polygon_hits_grid(block, maze.hwall, maze.vwall, maze.solid, maze.cell)
         return not hits and not polygons_overlap(block, placed_robot)
@@ -230,15 +236,16 @@ def _block(
         )
     rng = streams("scenario:block")
     cells = zones.loading.cells
-    size = maze.cell
+    clearance = settings.scenario.block_clearance
     for _ in range(BLOCK_TRIES):
         row, col = cells[int(rng.integers(len(cells)))]
-        x = (col + float(rng.random())) * size
-        y = (row + float(rng.random())) * size
-        if clear(x, y):
+        x = (col + float(rng.random())) * maze.cell
+        y = (row + float(rng.random())) * maze.cell
+        if clear(x, y, clearance):
             return x, y
     raise ScenarioError(
         "scenario.block",
-        f"'random' finds no place clear of walls and the robot found in the loading "
-        f"zone after {BLOCK_TRIES} draws; make the block smaller or the zone larger",
+        f"'random' finds no place in the loading zone {clearance:g} in clear of walls "
+        f"(block_clearance) and clear of the robot after {BLOCK_TRIES} draws; make "
+        "block_clearance or the block smaller, or the zone larger",
     )
