@@ -140,6 +140,8 @@ class Snapshot:
     """The name of the video the window is recording, if it is."""
     trail: TrailView | None = None
     """The path driven so far, if something keeps it."""
+    target: str | None = None
+    """The project's target zone (drawn in yellow), if the run has one."""
 
     @property
     def outline(self) -> FloatArray:
@@ -184,4 +186,5 @@ class Snapshot:
             switched_off=tuple(sim.switched_off.items()),
             recording=recording,
             trail=trail,
+            target=sim.scenario.target,
         )
