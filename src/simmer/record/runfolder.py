@@ -180,6 +180,7 @@ def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, A
         "simmer_version": simmer.__version__,
         "started": started.isoformat(timespec="seconds"),
         "seed": sim.seed,
+        "scenario": sim.scenario.as_dict(),
         "clock": setup.clock,
         "speed": setup.speed,
         "link_delay": setup.link_delay,
@@ -214,10 +215,12 @@ def load_run(folder: str | Path) -> LoadedRun:
     return LoadedRun(config, int(data["seed"]), read_events(Path(folder) / EVENTS))
 
 
-def start_pose(config: SimConfig) -> Pose:
-    """Where a configuration's robot starts."""
+def start_pose(config: SimConfig, seed: int) -> Pose:
+    """Where a configuration's robot starts with this seed (a project's start may be drawn)."""
     settings = config.settings
-    return Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+    if settings.scenario.start == "config":
+        return Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+    return Simulation(config, seed=seed).scenario.start
 
 
 def retrace(folder: str | Path, path: str | Path) -> Replayed:
@@ -225,7 +228,7 @@ def retrace(folder: str | Path, path: str | Path) -> Replayed:
     ``trace.csv``, or to write one that ``kill -9`` cut short."""
     config, seed, events = load_run(folder)
     writer = TraceWriter(path, sensor_ids(config), config.settings.frame_rate)
-    writer.begin(0.0, 0, start_pose(config))
+    writer.begin(0.0, 0, start_pose(config, seed))
     try:
         return replay(config, seed, events, [writer])
     finally:
@@ -237,6 +240,30 @@ def retrace(folder: str | Path, path: str | Path) -> Replayed:
 
 def _seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.2f} s"
+
+
+def project_lines(outcome: dict[str, Any], scenario: dict[str, Any] | None) -> list[str]:
+    """report.md's project section: the scenario, each milestone with its time, the score."""
+    from simmer.world.outcome import MILESTONE_WORDS
+
+    lines = ["## Project", ""]
+    if isinstance(scenario, dict):
+        x, y, heading = scenario["start"]
+        bx, by = scenario["block"]
+        lines += [
+            f"Started at [{x:g}, {y:g}] heading {heading:g} deg; the block at "
+            f"[{bx:.2f}, {by:.2f}]; target zone {scenario['target']}.",
+            "",
+        ]
+    lines += ["| Milestone | Simulated time |", "| --- | --- |"]
+    for name, words in MILESTONE_WORDS.items():
+        at = outcome.get(f"{name}_at")
+        lines.append(f"| {words[0].upper() + words[1:]} | {'no' if at is None else _seconds(at)} |")
+    if outcome.get("wrong_zone") and not outcome.get("delivered"):
+        wrong = f"{outcome['wrong_zone']} at {_seconds(outcome['wrong_zone_at'])}"
+        lines.append(f"| Put it down in another drop-off zone | {wrong} |")
+    lines += ["", f"**Score: {outcome['score']:g}** (the rubric is in the manifest).", ""]
+    return lines
 
 
 def write_report_md(folder: str | Path) -> Path:
@@ -279,6 +306,8 @@ def write_report_md(folder: str | Path) -> Path:
         f"| How it ended | {ended} |",
         "",
     ]
+    if "score" in outcome:
+        lines += project_lines(outcome, info.get("scenario"))
     if report["resets"]:
         count = report["resets"]
         times = "once" if count == 1 else f"{count} times"
