@@ -72,6 +72,7 @@ def forward(distance):
     if abs(distance) < 0.01:
         return
     send(f"w0-{distance:.3f}")
+    time.sleep(abs(distance) / 6)  # 6 in/s
     wait_until_stopped()
     x += -math.sin(math.radians(heading)) * distance
     y += math.cos(math.radians(heading)) * distance
@@ -82,6 +83,7 @@ def turn(degrees):
     if abs(degrees) < 0.01:
         return
     send(f"r0-{degrees:.3f}")
+    time.sleep(abs(degrees) / 120)  # 120 deg/s
     wait_until_stopped()
     heading = (heading + degrees) % 360
 
