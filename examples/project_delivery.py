@@ -163,15 +163,18 @@ def pick_up(bx, by):
             go_to(x, by - 7)
             go_to(bx, by - 7)
             approach = 0
-    face(approach)
-    sighting = scan(approach - 30, approach + 30, 1)
-    if sighting is not None:  # shift sideways onto the block's line
+    for _ in range(3):  # look closely, shift sideways onto the block's line, look again
+        face(approach)
+        sighting = scan(approach - 30, approach + 30, 1)
+        if sighting is None:
+            break
         h, distance = sighting
         across = (distance + BLOCK / 2) * math.sin(math.radians(h - approach))
-        if abs(across) > 0.1:
-            turn(90 if across > 0 else -90)
-            forward(abs(across))
-        face(approach)
+        if abs(across) < 0.1:
+            break
+        turn(90 if across > 0 else -90)
+        forward(abs(across))
+    face(approach)
     high, low = read()
     forward(low - 0.2)  # until the block's near side almost touches the back of the mouth
     if send("g0-1")[0] != 1.0:

@@ -112,6 +112,12 @@ class ProjectReport:
     """The course project's milestones (simulated seconds, None if not met) and score."""
 
     target: str | None
+    start_x: float
+    start_y: float
+    start_heading: float
+    block_x: float
+    block_y: float
+    """Where the run started and where the block lay (the scenario: drawn or given)."""
     entered_loading: bool
     entered_loading_at: float | None
     picked_up: bool
@@ -254,8 +260,14 @@ class Outcome:
             score += rubric.wrong_zone
         score += rubric.collision * self.collisions
         at = self.milestones.get
+        scenario = self.sim.scenario
         return ProjectReport(
-            target=self.sim.scenario.target,
+            target=scenario.target,
+            start_x=scenario.start.x,
+            start_y=scenario.start.y,
+            start_heading=scenario.start.heading,
+            block_x=scenario.block[0],
+            block_y=scenario.block[1],
             entered_loading="entered_loading" in self.milestones,
             entered_loading_at=at("entered_loading"),
             picked_up="picked_up" in self.milestones,
