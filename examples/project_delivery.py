@@ -33,6 +33,8 @@ CELL = 12.0
 ZONES = {"B1": (0, 5), "B2": (0, 7), "B3": (2, 2), "B4": (3, 7)}  # row, column
 SENSOR_AHEAD = 1.0  # u0 and u4 sit 1 in ahead of the robot's centre, at the back of the mouth
 BLOCK = 3.0
+HALF_WIDTH = 2.875  # half the robot's width
+TURNING = 5.0  # the robot turns in place this far from a wall at least
 SEES_BLOCK = 2.0  # the low sensor reads this much less than the high one: the block is there
 
 # where the robot is: x, y in inches, heading in degrees (0 = +y, 90 = -x, 180 = -y)
@@ -156,16 +158,19 @@ def pick_up(bx, by):
         go_to(bx, by + 7)
         approach = 180
     else:  # approach from above, facing down
-        if abs(bx - x) < 4.5 + BLOCK / 2 and y > by:
-            go_to(bx, y)  # in column 0 below it: line up under it
+        lane = min(x, bx - BLOCK / 2 - HALF_WIDTH - 0.3)  # pass the block on its left
+        if y > by and lane < TURNING:  # below it, no room to pass and turn: come from below
+            go_to(bx, y)
             approach = 180
         else:
+            if y > by:
+                go_to(lane, y)
             go_to(x, by - 7)
             go_to(bx, by - 7)
             approach = 0
     for _ in range(3):  # look closely, shift sideways onto the block's line, look again
         face(approach)
-        sighting = scan(approach - 30, approach + 30, 1)
+        sighting = scan(approach - 20, approach + 20, 1)
         if sighting is None:
             break
         h, distance = sighting
