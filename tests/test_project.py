@@ -7,14 +7,13 @@ import math
 import tomllib
 from typing import Any
 
-import numpy as np
 import pytest
 
 from link_support import serving, two_port_raw, two_port_send
 from simmer import Simulation
 from simmer.config.models import SimConfig
 from simmer.errors import ConfigError
-from simmer.geometry import place_polygon, polygon_hits_grid
+from simmer.geometry import polygon_hits_grid
 from simmer.world.outcome import Outcome
 from simmer.world.scenario import robot_fits
 from simmer.world.zones import Zones
@@ -37,8 +36,8 @@ def project_sim(seed: int = 1, **scenario: str) -> Simulation:
     return Simulation(make_config(project_data(**scenario)), seed=seed)
 
 
-def block_at(x: float, y: float, **scenario: str) -> Simulation:
-    return project_sim(block=f"{x},{y}", target="B1", **scenario)
+def block_at(x: float, y: float) -> Simulation:
+    return project_sim(block=f"{x},{y}", target="B1")
 
 
 # ----------------------------------------------------------------------------- zones
@@ -54,7 +53,9 @@ def test_project_convention_zones_of_the_default_maze() -> None:
         "B3": ((2, 2),),
         "B4": ((3, 7),),
     }
-    assert (3, 0) in zones.start and (0, 0) not in zones.start and (0, 5) not in zones.start
+    assert (3, 0) in zones.start
+    assert (0, 0) not in zones.start
+    assert (0, 5) not in zones.start
 
 
 def test_lab2023_convention_and_named_zones() -> None:
@@ -63,11 +64,13 @@ def test_lab2023_convention_and_named_zones() -> None:
     zones = Zones.from_settings(make_config(data).settings)
     assert zones.loading is not None
     assert zones.loading.cells == ((0, 5), (0, 7), (2, 2), (3, 7))
-    assert list(zones.dropoff) == ["D1"] and zones.start == ((0, 0), (0, 1), (1, 0), (1, 1))
+    assert list(zones.dropoff) == ["D1"]
+    assert zones.start == ((0, 0), (0, 1), (1, 0), (1, 1))
     data["zones"] = {"loading": [[3, 0]], "dropoff": {"HOME": [[3, 1], [3, 2]]}}
     data["scenario"]["target"] = "HOME"
     zones = Zones.from_settings(make_config(data).settings)
-    assert zones.loading is not None and zones.loading.cells == ((3, 0),)
+    assert zones.loading is not None
+    assert zones.loading.cells == ((3, 0),)
     assert zones.dropoff["HOME"].contains(30.0, 40.0, 12.0)
 
 
@@ -86,7 +89,8 @@ def test_bad_zones_are_named_plainly(zones: dict[str, Any], key: str, words: str
     with pytest.raises(ConfigError) as caught:
         make_config(data)
     text = str(caught.value)
-    assert key in text and words in text
+    assert key in text
+    assert words in text
 
 
 # ----------------------------------------------------------------------------- scenario
@@ -108,7 +112,8 @@ def test_each_part_has_its_own_stream() -> None:
     # naming the target outright leaves the start and block draws as they were
     a = project_sim(seed=3, start="random", target="random")
     b = project_sim(seed=3, start="random", target="B4")
-    assert a.scenario.start == b.scenario.start and a.scenario.block == b.scenario.block
+    assert a.scenario.start == b.scenario.start
+    assert a.scenario.block == b.scenario.block
 
 
 @pytest.mark.parametrize("where", ["random", "open"])
@@ -147,7 +152,8 @@ def test_bad_scenario_overrides_get_plain_errors(
     with pytest.raises(ConfigError) as caught:
         make_config(project_data(**scenario))
     text = str(caught.value)
-    assert key in text and words in text, text
+    assert key in text, text
+    assert words in text, text
 
 
 def test_a_named_start_and_block() -> None:
@@ -210,18 +216,21 @@ def test_picking_up_while_moving_and_carrying_it() -> None:
     assert sim.command("g0-1") == [0.0]
     sim.command("g0-0")
     sim.step(100)  # the block is in the mouth, the robot stopped against it, the drive busy
-    assert sim.robot.any_drive_moving and sim.collisions == 1
+    assert sim.robot.any_drive_moving
+    assert sim.collisions == 1
     assert sim.command("g0-1") == [1.0]
     held = sim.block.held
     gap = sim.robot.pose.y - sim.block.y
     stopped_at = sim.robot.pose.y
     sim.run_until_idle()  # the rest of the 24 in (less the blocked steps'), with the block
     assert sim.robot.pose.y < stopped_at - 5.0
-    assert sim.robot.pose.y - sim.block.y == pytest.approx(gap) and sim.block.x == 6.0
+    assert sim.robot.pose.y - sim.block.y == pytest.approx(gap)
+    assert sim.block.x == 6.0
     assert sim.block.held == held
     sim.command("r0-90")  # it turns with the robot (clockwise): now facing +x
     sim.run_until_idle()
-    assert sim.robot.pose.heading == pytest.approx(270.0) and sim.collisions == 1
+    assert sim.robot.pose.heading == pytest.approx(270.0)
+    assert sim.collisions == 1
     assert sim.block.x == pytest.approx(sim.robot.pose.x + gap)
     assert sim.block.y == pytest.approx(sim.robot.pose.y)
 
@@ -264,7 +273,8 @@ def test_release_leaves_the_block_where_it_is_and_it_is_an_obstacle_again() -> N
     assert sim.command("g0-0") == [0.0]
     sim.command("w0--6")
     sim.run_until_idle()
-    assert (sim.block.x, sim.block.y) == (x, y) and sim.block.held is None
+    assert (sim.block.x, sim.block.y) == (x, y)
+    assert sim.block.held is None
     sim.command("w0-12")  # forward again: stopped by the block, never pushing it
     sim.run_until_idle()
     assert (sim.block.x, sim.block.y) == (x, y)
@@ -325,20 +335,28 @@ def test_milestones_and_score_of_a_delivery(target: str, score: float) -> None:
         sim.run_until_idle()
         times.append(sim.time)
     project = outcome.report().project
-    assert project is not None and project.target == target
-    assert sim.collisions == 0 and sim.zones.dropoff_at(sim.block.x, sim.block.y) == "B3"
-    assert project.entered_loading and project.picked_up and project.left_loading
-    assert project.entered_loading_at is not None and project.entered_loading_at < times[0]
+    assert project is not None
+    assert project.target == target
+    assert sim.collisions == 0
+    assert sim.zones.dropoff_at(sim.block.x, sim.block.y) == "B3"
+    assert project.entered_loading
+    assert project.picked_up
+    assert project.left_loading
+    assert project.entered_loading_at is not None
+    assert project.entered_loading_at < times[0]
     assert project.picked_up_at == times[0]  # the command at the end of the first move
-    assert project.left_loading_at is not None and times[1] < project.left_loading_at < times[2]
+    assert project.left_loading_at is not None
+    assert times[1] < project.left_loading_at < times[2]
     assert project.delivered is (target == "B3")
     assert project.delivered_at == (times[-1] if target == "B3" else None)
     assert project.wrong_zone == (None if target == "B3" else "B3")
     assert project.score == score
     line = outcome.report().summary()
-    assert f"project (target {target})" in line and f"score {score:g}" in line
+    assert f"project (target {target})" in line
+    assert f"score {score:g}" in line
     flat = outcome.report().as_dict()
-    assert flat["delivered"] is (target == "B3") and flat["score"] == score
+    assert flat["delivered"] is (target == "B3")
+    assert flat["score"] == score
 
 
 def test_collisions_and_the_time_limit_cost_points() -> None:
@@ -353,9 +371,12 @@ def test_collisions_and_the_time_limit_cost_points() -> None:
         sim.command(message)
         sim.run_until_idle()
     project = outcome.report().project
-    assert project is not None and project.delivered
-    assert project.left_loading_at is not None and project.left_loading_at < 10
-    assert project.delivered_at is not None and project.delivered_at > 10
+    assert project is not None
+    assert project.delivered
+    assert project.left_loading_at is not None
+    assert project.left_loading_at < 10
+    assert project.delivered_at is not None
+    assert project.delivered_at > 10
     assert project.score == 10 + 20 + 10 - 5  # the delivery came too late; one collision
 
 
@@ -364,5 +385,6 @@ def test_a_lab1_run_has_no_project_in_its_outcome() -> None:
     outcome = Outcome.attach(sim)
     sim.step()
     report = outcome.report()
-    assert report.project is None and "project" not in report.summary()
+    assert report.project is None
+    assert "project" not in report.summary()
     assert "score" not in report.as_dict()
