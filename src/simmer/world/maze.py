@@ -174,6 +174,15 @@ class Block:
         place_polygon(self.local, x, y, rotation, self.polygon)
         self.segments = np.hstack((self.polygon, np.roll(self.polygon, -1, axis=0)))
 
+    def carry_to(self, pose: Pose, polygon: FloatArray) -> None:
+        """Move the held block to ``pose`` whose outline, already placed, is ``polygon``
+        (each step of a carried block: no new arrays)."""
+        self.x, self.y, self.rotation = pose
+        self.polygon[:] = polygon
+        self.segments[:, :2] = polygon
+        self.segments[:-1, 2:] = polygon[1:]
+        self.segments[-1, 2:] = polygon[0]
+
     def hold(self, robot: Pose) -> None:
         """A gripper took the block: from now on it keeps its pose relative to the robot."""
         local = rotate(self.x - robot.x, self.y - robot.y, -robot.heading)

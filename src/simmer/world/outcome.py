@@ -157,7 +157,10 @@ class Outcome:
         self.sim = sim
         robot_radius = float(np.sqrt((sim.robot.outline**2).sum(axis=1)).max())
         self._near = robot_radius + sim.block.size * math.sqrt(0.5) + REACH_DISTANCE
-        self._zoned = project_run(sim.config) and bool(sim.zones.loading or sim.zones.dropoff)
+        zones = sim.zones
+        self._zoned = project_run(sim.config) and bool(zones.loading or zones.dropoff)
+        self._loading = frozenset(zones.loading.cells if zones.loading else ())
+        self._cell = zones.cell
         self._clear()
 
     @classmethod
@@ -198,10 +201,10 @@ class Outcome:
                 log.info("reached the block at %.2f s (Task 2 time %.2f s)", event.time, task2)
                 self.sim.emit(ReachedEvent(event.time, task2, event.step))
             if self._zoned:
-                self._project(event.time)
+                self._moved(event.time)
         elif isinstance(event, CommandEvent):
             if self._zoned:
-                self._project(event.time)
+                self._gripped(event.time)
             self.messages += 1
             self.commands += len(event.replies)
             self.nan_replies += sum(math.isnan(value) for value in event.replies)
@@ -223,27 +226,37 @@ class Outcome:
             self.first_motion = None
             self.reached_at = None
 
-    def _project(self, time: float) -> None:
-        """Note the project's milestones met by now (each once, at its first time)."""
+    def _gripped(self, time: float) -> None:
+        """After a command: the block picked up, or put down (delivered, or in another zone)."""
         sim = self.sim
-        zones = sim.zones
-        met = self.milestones
-        pose = sim.robot.pose
-        inside = zones.in_loading(pose.x, pose.y)
-        if inside and "entered_loading" not in met:
-            met["entered_loading"] = time
         held = sim.block.held is not None
-        if held and "picked_up" not in met:
-            met["picked_up"] = time
-        if held and not inside and "picked_up" in met and "left_loading" not in met:
-            met["left_loading"] = time
-        if self._held and not held and "delivered" not in met:
-            zone = zones.dropoff_at(sim.block.x, sim.block.y)
+        if held == self._held:
+            return
+        self._held = held
+        met = self.milestones
+        if held:
+            met.setdefault("picked_up", time)
+        elif "delivered" not in met:
+            zone = sim.zones.dropoff_at(sim.block.x, sim.block.y)
             if zone is not None and zone == sim.scenario.target:
                 met["delivered"] = time
             elif zone is not None and self.wrong_zone is None:
                 self.wrong_zone = (zone, time)
-        self._held = held
+
+    def _moved(self, time: float) -> None:
+        """After a step: the loading zone entered, or left holding the block (checked only
+        while one of them is still to come: a step costs little)."""
+        met = self.milestones
+        entering = "entered_loading" not in met
+        leaving = self._held and "left_loading" not in met
+        if not (entering or leaving):
+            return
+        pose = self.sim.robot.pose
+        inside = (int(pose.y // self._cell), int(pose.x // self._cell)) in self._loading
+        if inside and entering:
+            met["entered_loading"] = time
+        elif leaving and not inside:
+            met["left_loading"] = time
 
     def project_report(self) -> ProjectReport | None:
         """The milestones and score so far (None if the maze has no zones)."""

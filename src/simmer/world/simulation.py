@@ -389,8 +389,8 @@ class Simulation:
         robot.pose = target
         robot.turned = rotation
         block = self._block
-        if block.held is not None:
-            block.place(*block.carried_pose(target))
+        if block.held is not None:  # _blocked placed its outline at the target
+            block.carry_to(block.carried_pose(target), self._carried)
 
     def _blocked(self, target: Pose) -> bool:
         """True if the robot at ``target`` would touch a wall or the block, or the block it
@@ -450,8 +450,8 @@ class Simulation:
         if self._blocked(pose):
             return False
         robot.pose = pose
-        if self._block.held is not None:
-            self._block.place(*self._block.carried_pose(pose))
+        if self._block.held is not None:  # _blocked placed its outline at the pose
+            self._block.carry_to(self._block.carried_pose(pose), self._carried)
         if self.observers:
             self.emit(PlaceEvent(self._time, robot.pose, self.frame))
         return True
