@@ -201,10 +201,11 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     ax = fig.add_subplot()
     for x1, y1, x2, y2 in maze.segments:
         ax.plot([x1, x2], [y1, y2], color="black", lw=2)
-    bx, by = settings.block_position
-    ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")
-    sx, sy = settings.robot_start_position
-    ax.plot(sx, sy, "^", ms=9, mfc="none", mec="#555555", label="start")
+    if not spec.project:  # a project run's block and start may be drawn: each its own
+        bx, by = settings.block_position
+        ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")
+        sx, sy = settings.robot_start_position
+        ax.plot(sx, sy, "^", ms=9, mfc="none", mec="#555555", label="start")
     groups = [("", "o", "success", SUCCESS_COLOR)] + [
         (kind, marker, name, FAILURE_COLOR) for kind, (marker, name) in FAILURE_MARKERS.items()
     ]
