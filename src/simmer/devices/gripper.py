@@ -22,7 +22,7 @@ from typing import ClassVar
 import numpy as np
 from pydantic import Field
 
-from simmer.devices.base import Category, Color, Device, DeviceParams, World
+from simmer.devices.base import Category, Color, Device, DeviceParams, Mount, World
 from simmer.errors import CommandError
 from simmer.geometry import rotate
 
@@ -31,7 +31,7 @@ class GripperParams(DeviceParams):
     """Gripper settings: where the jaws are and how large."""
 
     type: str = "gripper"
-    position: tuple[float, ...] = Field(
+    position: Mount = Field(
         (0.0, 4.0), description="[x, y] of the middle of the jaws' back, robot frame, inches."
     )
     opening: float = Field(4.0, gt=0, description="Width between the open jaws, inches.")
@@ -40,7 +40,7 @@ class GripperParams(DeviceParams):
 
 
 class Gripper(Device):
-    """Holds the block when closed on it; see the module docstring."""
+    """Jaws that pick the block up (command 1) and put it down (0); both answer 1 if held."""
 
     category: ClassVar[Category] = "drive"
     Params = GripperParams
