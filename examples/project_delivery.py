@@ -12,7 +12,8 @@ knows its start and counts its moves (the example configuration has no noise).
 
 or in one go, the answer typed for it, as fast as the machine goes:
 
-    simmer run examples/project.toml --headless --program "python examples/project_delivery.py" --answer "{target}"
+    simmer run examples/project.toml --headless --answer "{target}" \
+        --program "python examples/project_delivery.py"
 """
 
 import math
@@ -38,7 +39,7 @@ TURNING = 5.0  # the robot turns in place this far from a wall at least
 SEES_BLOCK = 2.0  # the low sensor reads this much less than the high one: the block is there
 
 # where the robot is: x, y in inches, heading in degrees (0 = +y, 90 = -x, 180 = -y)
-x, y, heading = 6.0, 42.0, 180.0
+pose = {"x": 6.0, "y": 42.0, "heading": 180.0}
 
 
 # ---------------------------------------------------------------- talking to the robot
@@ -70,28 +71,26 @@ def wait_until_stopped():
 
 
 def forward(distance):
-    global x, y
     if abs(distance) < 0.01:
         return
     send(f"w0-{distance:.3f}")
     time.sleep(abs(distance) / 6)  # 6 in/s
     wait_until_stopped()
-    x += -math.sin(math.radians(heading)) * distance
-    y += math.cos(math.radians(heading)) * distance
+    pose["x"] += -math.sin(math.radians(pose["heading"])) * distance
+    pose["y"] += math.cos(math.radians(pose["heading"])) * distance
 
 
 def turn(degrees):
-    global heading
     if abs(degrees) < 0.01:
         return
     send(f"r0-{degrees:.3f}")
     time.sleep(abs(degrees) / 120)  # 120 deg/s
     wait_until_stopped()
-    heading = (heading + degrees) % 360
+    pose["heading"] = (pose["heading"] + degrees) % 360
 
 
 def face(new_heading):
-    turn((new_heading - heading + 180) % 360 - 180)
+    turn((new_heading - pose["heading"] + 180) % 360 - 180)
 
 
 def read():
@@ -123,20 +122,20 @@ def scan(start, stop, step):
 def block_place(sighting):
     """Where the block's centre is, from a sighting taken here."""
     h, distance = sighting
-    sx = x - math.sin(math.radians(heading)) * SENSOR_AHEAD
-    sy = y + math.cos(math.radians(heading)) * SENSOR_AHEAD
+    sx = pose["x"] - math.sin(math.radians(pose["heading"])) * SENSOR_AHEAD
+    sy = pose["y"] + math.cos(math.radians(pose["heading"])) * SENSOR_AHEAD
     reach = distance + BLOCK / 2
     return sx - math.sin(math.radians(h)) * reach, sy + math.cos(math.radians(h)) * reach
 
 
 def go_to(tx, ty):
     """Drive there: along y first, then along x, facing the way of travel."""
-    if abs(ty - y) > 0.01:
-        face(0 if ty > y else 180)
-        forward(abs(ty - y))
-    if abs(tx - x) > 0.01:
-        face(270 if tx > x else 90)
-        forward(abs(tx - x))
+    if abs(ty - pose["y"]) > 0.01:
+        face(0 if ty > pose["y"] else 180)
+        forward(abs(ty - pose["y"]))
+    if abs(tx - pose["x"]) > 0.01:
+        face(270 if tx > pose["x"] else 90)
+        forward(abs(tx - pose["x"]))
 
 
 def find_block():
@@ -154,18 +153,18 @@ def find_block():
 def pick_up(bx, by):
     """Line up 7 in from the block on one side, look again closely, drive the mouth around it."""
     if by < 12:  # approach from below, facing up
-        go_to(x, by + 7)
+        go_to(pose["x"], by + 7)
         go_to(bx, by + 7)
         approach = 180
     else:  # approach from above, facing down
-        lane = min(x, bx - BLOCK / 2 - HALF_WIDTH - 0.3)  # pass the block on its left
-        if y > by and lane < TURNING:  # below it, no room to pass and turn: come from below
-            go_to(bx, y)
+        lane = min(pose["x"], bx - BLOCK / 2 - HALF_WIDTH - 0.3)  # pass the block on its left
+        if pose["y"] > by and lane < TURNING:  # below it, no room to pass: come from below
+            go_to(bx, pose["y"])
             approach = 180
         else:
-            if y > by:
-                go_to(lane, y)
-            go_to(x, by - 7)
+            if pose["y"] > by:
+                go_to(lane, pose["y"])
+            go_to(pose["x"], by - 7)
             go_to(bx, by - 7)
             approach = 0
     for _ in range(3):  # look closely, shift sideways onto the block's line, look again
@@ -180,7 +179,7 @@ def pick_up(bx, by):
         turn(90 if across > 0 else -90)
         forward(abs(across))
     face(approach)
-    high, low = read()
+    low = read()[1]
     forward(low - 0.2)  # until the block's near side almost touches the back of the mouth
     if send("g0-1")[0] != 1.0:
         raise SystemExit("the gripper closed on nothing")
@@ -210,7 +209,7 @@ def route(start, goal):
 
 
 def deliver(zone):
-    here = (int(y // CELL), int(x // CELL))
+    here = (int(pose["y"] // CELL), int(pose["x"] // CELL))
     go_to((here[1] + 0.5) * CELL, (here[0] + 0.5) * CELL)
     for r, c in route(here, ZONES[zone])[1:]:
         go_to((c + 0.5) * CELL, (r + 0.5) * CELL)

@@ -14,6 +14,7 @@ from simmer import Simulation
 from simmer.config.models import SimConfig
 from simmer.errors import ConfigError
 from simmer.geometry import polygon_hits_grid
+from simmer.record.runfolder import project_lines
 from simmer.world.outcome import Outcome
 from simmer.world.scenario import robot_fits
 from simmer.world.zones import Zones
@@ -388,3 +389,14 @@ def test_a_lab1_run_has_no_project_in_its_outcome() -> None:
     assert report.project is None
     assert "project" not in report.summary()
     assert "score" not in report.as_dict()
+
+
+def test_report_md_project_lines_take_only_what_is_well_formed() -> None:
+    outcome = {"entered_loading_at": 4.5, "picked_up_at": "soon", "score": 30.0}
+    good = project_lines(outcome, {"start": [6, 42, 180], "block": [7.25, 8.5], "target": "B2"})
+    assert "Started at [6, 42] heading 180 deg; the block at [7.25, 8.50]; target zone B2." in good
+    assert "| Entered the loading zone | 4.50 s |" in good
+    assert "| Picked up the block | no |" in good  # not a number: said as not met
+    assert "**Score: 30** (the rubric is in the manifest)." in good
+    hostile = project_lines({"score": "x", "wrong_zone": 5}, {"start": "here", "block": None})
+    assert not any("Started" in line or "Score" in line or "another" in line for line in hostile)

@@ -242,27 +242,48 @@ def _seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.2f} s"
 
 
-def project_lines(outcome: dict[str, Any], scenario: dict[str, Any] | None) -> list[str]:
-    """report.md's project section: the scenario, each milestone with its time, the score."""
+def _numbers(value: Any, count: int) -> list[float] | None:
+    """``count`` finite numbers from a list read back from a run folder, else None."""
+    if not isinstance(value, list) or len(value) != count:
+        return None
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return None
+    numbers = [float(v) for v in value]
+    return numbers if all(math.isfinite(v) for v in numbers) else None
+
+
+def _time(value: Any) -> str:
+    """A milestone's time as report.md writes it: ``12.50 s``, or ``no``."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return f"{value:.2f} s"
+    return "no"
+
+
+def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
+    """report.md's project section: the scenario, each milestone with its time, the score
+    (whatever of it the run folder holds in the expected form)."""
     from simmer.world.outcome import MILESTONE_WORDS
 
     lines = ["## Project", ""]
     if isinstance(scenario, dict):
-        x, y, heading = scenario["start"]
-        bx, by = scenario["block"]
-        lines += [
-            f"Started at [{x:g}, {y:g}] heading {heading:g} deg; the block at "
-            f"[{bx:.2f}, {by:.2f}]; target zone {scenario['target']}.",
-            "",
-        ]
+        start, block = _numbers(scenario.get("start"), 3), _numbers(scenario.get("block"), 2)
+        target = scenario.get("target")
+        if start is not None and block is not None and isinstance(target, str | None):
+            lines += [
+                f"Started at [{start[0]:g}, {start[1]:g}] heading {start[2]:g} deg; the block "
+                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {target}.",
+                "",
+            ]
     lines += ["| Milestone | Simulated time |", "| --- | --- |"]
     for name, words in MILESTONE_WORDS.items():
-        at = outcome.get(f"{name}_at")
-        lines.append(f"| {words[0].upper() + words[1:]} | {'no' if at is None else _seconds(at)} |")
-    if outcome.get("wrong_zone") and not outcome.get("delivered"):
-        wrong = f"{outcome['wrong_zone']} at {_seconds(outcome['wrong_zone_at'])}"
-        lines.append(f"| Put it down in another drop-off zone | {wrong} |")
-    lines += ["", f"**Score: {outcome['score']:g}** (the rubric is in the manifest).", ""]
+        lines.append(f"| {words[0].upper() + words[1:]} | {_time(outcome.get(f'{name}_at'))} |")
+    wrong = outcome.get("wrong_zone")
+    if isinstance(wrong, str) and not outcome.get("delivered"):
+        at = _time(outcome.get("wrong_zone_at"))
+        lines.append(f"| Put it down in another drop-off zone | {wrong} at {at} |")
+    score = outcome.get("score")
+    if isinstance(score, int | float) and not isinstance(score, bool):
+        lines += ["", f"**Score: {score:g}** (the rubric is in the manifest).", ""]
     return lines
 
 
