@@ -312,6 +312,8 @@ def run(
         port = 0 if port is None else port
     if reply_bytes not in (None, 4, 8):
         raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
+    if answer is not None and program is None:
+        raise typer.BadParameter("what --program reads at its prompt: give --program too")
     overrides = {  # into the configuration, so that the start-up summary shows what is used
         "protocol": protocol and protocol.value,
         "reply_bytes": reply_bytes,

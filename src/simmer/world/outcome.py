@@ -259,7 +259,7 @@ class Outcome:
             met["left_loading"] = time
 
     def project_report(self) -> ProjectReport | None:
-        """The milestones and score so far (None if the maze has no zones)."""
+        """The milestones and score so far (None unless this is a project run with zones)."""
         if not self._zoned:
             return None
         rubric = self.sim.config.settings.score
