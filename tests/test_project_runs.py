@@ -43,7 +43,7 @@ def cli(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "simmer", "run", str(EXAMPLES / "project.toml"), "--headless",
          "--port", "0", "--port-rx", "0", "--port-tx", "0", *args],
-        capture_output=True, text=True, timeout=240, check=False, cwd=cwd,
+        capture_output=True, text=True, timeout=240, check=False, cwd=cwd, stdin=subprocess.DEVNULL,
     )  # fmt: skip
 
 

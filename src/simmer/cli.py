@@ -314,6 +314,13 @@ def run(
         raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
     if answer is not None and program is None:
         raise typer.BadParameter("what --program reads at its prompt: give --program too")
+    from simmer.serve import MAX_ANSWER
+
+    if answer is not None and len(answer) > MAX_ANSWER:
+        raise typer.BadParameter(
+            f"{len(answer):,} characters; at most {MAX_ANSWER:,} (a few typed lines)",
+            param_hint="--answer",
+        )
     overrides = {  # into the configuration, so that the start-up summary shows what is used
         "protocol": protocol and protocol.value,
         "reply_bytes": reply_bytes,

@@ -238,14 +238,27 @@ MAX_ANSWER = 4096
 never waits for the program to read)."""
 
 
+_STARTING = threading.Lock()
+"""Held while a program starts: standard input is the process's, and runs in threads of one
+process (a Dask worker's) must not start a program while another's answer stands in for it."""
+
+
 @contextmanager
 def _standard_input(answer: str | None) -> Iterator[None]:
     """While a program starts: this process's standard input is a pipe holding ``answer`` and
     a newline, then its end, which the program inherits (``Program.start`` passes on the run's
     own standard input); None leaves it alone."""
-    if answer is None:
-        yield
-        return
+    with _STARTING:
+        if answer is None:
+            yield
+        else:
+            with _answering(answer):
+                yield
+
+
+@contextmanager
+def _answering(answer: str) -> Iterator[None]:
+    """Standard input replaced by a pipe holding ``answer``, then restored."""
     if len(answer) > MAX_ANSWER:
         raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
     read, write = os.pipe()
