@@ -16,6 +16,7 @@ import pytest
 from PIL import Image
 
 from simmer import Simulation
+from simmer.record.plots import plot_run
 from simmer.record.runfolder import load_run, retrace
 from simmer.serve import serve
 from simmer.sweep.spec import SweepError, load_sweep, sweep_from_dict
@@ -119,6 +120,12 @@ def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     assert replayed.sim.robot.pose == sim.robot.pose
     retrace(folder, tmp_path / "again.csv")
     assert (tmp_path / "again.csv").read_text() == (folder / "trace.csv").read_text()
+    plot_run(folder)  # path.png with the zones, the drawn start and block
+    assert (folder / "path.png").is_file()
+    report_md = (folder / "report.md").read_text()
+    assert "## Project" in report_md
+    assert "| Delivered it |" in report_md
+    assert "**Score: 100**" in report_md
 
 
 def test_a_video_frame_shows_the_zones_and_the_carried_block(tmp_path: Path) -> None:
