@@ -385,6 +385,37 @@ def run(
     force: Annotated[
         bool, typer.Option("--force", help="Let --video replace an existing file.")
     ] = False,
+    start: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: where the robot starts: a cell 'row,col' or 'row,col,heading', "
+            "'random' (a start cell drawn from the seed), 'open' or 'config'.",
+            show_default=False,
+        ),
+    ] = None,
+    block: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: the block's centre 'x,y' in inches, 'random' (inside the loading "
+            "zone, drawn from the seed) or 'config'.",
+            show_default=False,
+        ),
+    ] = None,
+    target: Annotated[
+        str | None,
+        typer.Option(
+            help="Project: the drop-off zone to deliver to (e.g. B2), or 'random'.",
+            show_default=False,
+        ),
+    ] = None,
+    answer: Annotated[
+        str | None,
+        typer.Option(
+            help='What --program reads at its input() prompt (e.g. the target zone, "B2"); '
+            "'{target}' is replaced by this run's target.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -410,6 +441,15 @@ def run(
         port = 0 if port is None else port
     if reply_bytes not in (None, 4, 8):
         raise typer.BadParameter("4 or 8", param_hint="--reply-bytes")
+    if answer is not None and program is None:
+        raise typer.BadParameter("what --program reads at its prompt: give --program too")
+    from simmer.lockstep import MAX_ANSWER
+
+    if answer is not None and len(answer) > MAX_ANSWER:
+        raise typer.BadParameter(
+            f"{len(answer):,} characters; at most {MAX_ANSWER:,} (a few typed lines)",
+            param_hint="--answer",
+        )
     overrides = {  # into the configuration, so that the start-up summary shows what is used
         "protocol": protocol and protocol.value,
         "reply_bytes": reply_bytes,
@@ -426,6 +466,7 @@ def run(
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
+    loaded = _with_scenario(loaded, start=start, block=block, target=target)
     try:
         sim = Simulation(loaded, seed=seed)
     except Exception:  # a device's own constructor: say which, as `check` does
@@ -437,6 +478,12 @@ def run(
     if loaded.origin:
         out.print(loaded.origin, markup=False)
     out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
+    from simmer.world.zones import project_run
+
+    if project_run(loaded):
+        out.print(f"scenario: {sim.scenario.describe()}", markup=False)
+    if answer is not None and sim.scenario.target is not None:
+        answer = answer.replace("{target}", sim.scenario.target)
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
@@ -469,6 +516,7 @@ def run(
             timeout=timeout,
             record=record,
             video=video,
+            answer=answer,
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -490,6 +538,25 @@ def run(
             ended = "the run was stopped"
         out.print(f"run ended: {ended}; log: {log_file}", markup=False)
     raise typer.Exit(served.exit_status)
+
+
+def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
+    """The configuration with --start, --block and --target in its [scenario] (so the manifest
+    and a replay have them); a part that cannot be met is one plain line and exit status 1."""
+    from simmer.config import with_settings
+
+    given = {key: value for key, value in parts.items() if value is not None}
+    if not given:
+        return config
+    scenario = {**config.settings.scenario.model_dump(), **given}
+    try:
+        return with_settings(config, {"scenario": scenario})
+    except ConfigError as exc:
+        for issue in exc.issues:
+            part = issue.key.removeprefix("scenario.")
+            where = f"--{part}" if part in given else issue.key
+            err.print(f"{where}: {issue.message}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
 
 
 def _check_video(path: Path, *, force: bool) -> None:

@@ -410,7 +410,7 @@ class FramedCodec:
         if category is None:
             return f"{device_id}:Not Found"
         if category == "drive":
-            return f"{device_id}:{not math.isnan(value)}"
+            return f"{device_id}:{not math.isnan(value) and value != 0.0}"  # a gripper: 0.0
         return f"{device_id}:{round(float(value), self.round_digits)!r}"
 
 

@@ -130,6 +130,7 @@ def serve(
     timeout: float | None = None,
     record: Path | None = None,
     video: Path | None = None,
+    answer: str | None = None,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -138,7 +139,9 @@ def serve(
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
-    with a window or headless, and the file is finished however the run ends.
+    with a window or headless, and the file is finished however the run ends. With ``answer``,
+    the program's standard input is that text, a line, then its end (what a student types at
+    the program's ``input()`` prompt: the project's target zone).
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
     ``record`` folder cannot be written (FileExistsError if it holds a run already), and
@@ -189,7 +192,7 @@ def serve(
                     echo(NOT_PYTHON.format(command=program))
             if program is not None:
                 started = _start_program(
-                    program, link, sim.config, runner.bus, stop, ended, timeout, echo
+                    program, link, sim.config, runner.bus, stop, ended, timeout, echo, answer
                 )
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
@@ -249,6 +252,7 @@ def _start_program(
     ended: list[str],
     timeout: float | None,
     echo: Callable[[str], None],
+    answer: str | None = None,
 ) -> Program:
     """Start the control program on this run's ports; a thread ends the run when it exits or
     at the wall-clock ``timeout`` (then stopping its whole process tree)."""
@@ -262,7 +266,7 @@ def _start_program(
     env = program_environment(ports, link.host, configured=configured)
     if link.serial is not None:
         env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
-    program = Program.start(command, env)
+    program = Program.start(command, env, answer)
     echo(f"started the program: {command}")
 
     def watch() -> None:

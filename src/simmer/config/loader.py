@@ -172,15 +172,29 @@ def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True)
         for g in DEVICE_GROUPS
     ]
     served = f"; SimMeR TCP on {s.host}:{s.port_rx}/{s.port_tx}" if ports else ""
+    block = (
+        f"at {list(s.block_position)}"
+        if s.scenario.block == "config"
+        else (
+            "drawn inside the loading zone"
+            if s.scenario.block == "random"
+            else f"at {s.scenario.block}"
+        )
+    )
+    start = f"at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg"
+    if s.scenario.start != "config":
+        start = {"random": "in a start cell drawn", "open": "in an open cell drawn"}.get(
+            s.scenario.start, f"in cell {s.scenario.start}"
+        )
     return (
         f"Maze of {cols} x {rows} cells of {length:g} in "
         f"({cols * length:g} x {rows * length:g} in), "
         f"floor tiles of {s.floor_segment_length:g} in from seed {s.floor_seed}. "
-        f"Block of {s.block_size:g} in at {list(s.block_position)}. "
-        f"Robot starting at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg "
+        f"Block of {s.block_size:g} in {block}. "
+        f"Robot starting {start} "
         f"with {', '.join(parts)}. "
         f"Noise: {describe_noise(config, seed)}. {s.frame_rate:g} steps/s{served}, replies "
-        f"{describe_replies(s)}."
+        f"{describe_replies(s)}." + _project(config)
     )
 
 
@@ -215,6 +229,18 @@ def describe_noise(config: SimConfig, seed: int | None = None) -> str:
         f"; drive biases drawn at start (strength {list(s.bias_strength)})" if s.rand_bias else ""
     )
     return f"{devices}; {draw}{drawn}"
+
+
+def _project(config: SimConfig) -> str:
+    """The zones and the target, for a project run or a configuration that names zones."""
+    from simmer.config.project import ZoneSettings
+    from simmer.world.zones import Zones, project_run
+
+    s = config.settings
+    if not project_run(config) and s.zones == ZoneSettings():
+        return ""
+    target = "drawn from the seed" if s.scenario.target == "random" else s.scenario.target
+    return f" {Zones.from_settings(s).describe()} Target zone: {target}."
 
 
 def describe_replies(settings: Settings) -> str:

@@ -19,6 +19,7 @@ from typing import Literal
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
+from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.errors import ConfigIssue
 from simmer.ports import PORT_RX, PORT_TX
@@ -171,6 +172,12 @@ class Settings(BaseModel):
         description=f"Drawn block outline width, inches (at most {MAX_LINE_WIDTH:g}).",
     )
     block_color: Color = Field((127, 127, 20), description="Block RGB.")
+    # Project (docs/project.md)
+    zones: ZoneSettings = Field(ZoneSettings(), description="Named areas of the maze.")
+    scenario: ScenarioSettings = Field(
+        ScenarioSettings(), description="Start, block place and target zone of a run."
+    )
+    score: ScoreSettings = Field(ScoreSettings(), description="The project's scoring rubric.")
     # Debug
     simulate_list: tuple[str, ...] = Field(
         (), description="Sensor ids read every step, so their measurement is always drawn."

@@ -8,12 +8,18 @@ from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
 from simmer.config.models import Settings
+from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices import DeviceParams, device_kinds
+
+PROJECT_TABLES = (ZoneSettings, ScenarioSettings, ScoreSettings)
+"""The course project's tables, each listed in a section of its own."""
 
 
 def _default(value: Any) -> str:
     if value is PydanticUndefined or value is None:
         return "—"
+    if isinstance(value, PROJECT_TABLES):
+        return "table below"
     if isinstance(value, BaseModel):
         return "{" + ", ".join(f"{k} = {v:g}" for k, v in value.model_dump().items()) + "}"
     if isinstance(value, tuple) and value and isinstance(value[0], tuple):
@@ -52,6 +58,11 @@ def reference_markdown() -> str:
         "",
         *_table(Settings),
     ]
+    for key, model in (("zones", ZoneSettings), ("scenario", ScenarioSettings)):
+        lines += ["", f"## `[{key}]` (the course project, docs/project.md)", ""]
+        lines += [(model.__doc__ or "").strip().splitlines()[0], "", *_table(model)]
+    lines += ["", "## `[score]` (the course project's rubric)", ""]
+    lines += [(ScoreSettings.__doc__ or "").strip().splitlines()[0], "", *_table(ScoreSettings)]
     for name, kind in sorted(device_kinds().items()):
         if kind.__module__.startswith("simmer."):
             lines += ["", f'## `type = "{name}"` ({kind.category})', ""]

@@ -94,6 +94,7 @@ def config_from_dict(
         issues += maze_issues + _check_references(settings, declared)
         if not (oversize or maze_issues):  # the placement check builds the maze
             _check_placement(settings, found)
+            issues += check_project(settings)
     if issues:
         raise ConfigError(source, issues)
     assert settings is not None
@@ -122,6 +123,7 @@ def with_settings(
     issues += _check_references(settings, declared)
     if not issues:
         _check_placement(settings, found)
+        issues += check_project(settings)
     if issues:
         raise ConfigError(source, issues)
     return replace(config, settings=settings)
@@ -562,6 +564,35 @@ def _check_placement(settings: Settings, found: _Found) -> None:
             warning="the block overlaps the robot's start position, so the robot starts "
             "touching it, and a move that leaves it touching the block is undone",
         )
+
+
+def check_project(settings: Settings) -> list[ConfigIssue]:
+    """Zones on open cells of the maze, and a scenario that can be met (its start cell, block
+    place and target zone), each mistake named by its key."""
+    from simmer.world.maze import Maze
+    from simmer.world.scenario import ScenarioError, check_cell, draw_scenario
+    from simmer.world.zones import Zones
+
+    maze = Maze.from_settings(settings)
+    z = settings.zones
+    issues = []
+    named = [("zones.loading", z.loading), ("zones.start", z.start)] + [
+        (f"zones.dropoff.{name}", cells) for name, cells in (z.dropoff or {}).items()
+    ]
+    for key, cells in named:
+        for i, cell in enumerate(cells or ()):
+            try:
+                check_cell(maze, cell, f"{key}[{i}]")
+            except ScenarioError as exc:
+                issues.append(ConfigIssue(exc.key, exc.message))
+    if issues:
+        return issues
+    zones = Zones.from_settings(settings)
+    try:  # the draws need a seed; any will do to find a setting that cannot be met
+        draw_scenario(settings, maze, zones, lambda _: np.random.default_rng(0))
+    except ScenarioError as exc:
+        issues.append(ConfigIssue(exc.key, exc.message))
+    return issues
 
 
 def _hidden_place(maze: Maze, polygon: FloatArray) -> str | None:

@@ -31,6 +31,7 @@ BUILTIN_KINDS = {
     "gyroscope": "simmer.devices.sensors:Gyroscope",
     "compass": "simmer.devices.sensors:Compass",
     "infrared": "simmer.devices.sensors:Infrared",
+    "gripper": "simmer.devices.gripper:Gripper",
     # a device class written for the original SimMeR
     "simmer_device": "simmer.compat.template:SimmerDevice",
 }

@@ -44,6 +44,10 @@ a few times per ``read``) never advance time, so a run does not depend on how da
 STANDARD_PORTS = {"port_rx": PORT_RX, "port_tx": PORT_TX, "stream": STREAM_PORT}
 """SimMeR's standard ports, which a lockstep program's connections are redirected from."""
 
+MAX_ANSWER = 4096
+"""Characters of ``--answer``: a few typed lines, well inside a pipe's buffer (so writing them
+never waits for the program to read)."""
+
 EXIT_SECONDS = 3
 """``simmer run --program`` exit status when the ``--seconds`` limit of simulated time ended it."""
 EXIT_TIMEOUT = 124
@@ -127,9 +131,23 @@ class Program:
     process: subprocess.Popen[bytes]
 
     @classmethod
-    def start(cls, command: str | Sequence[str], env: Mapping[str, str]) -> Program:
-        """Start ``command`` (raises ``OSError`` if it cannot be started)."""
-        process = subprocess.Popen(split_command(command), env=dict(env), start_new_session=True)
+    def start(
+        cls, command: str | Sequence[str], env: Mapping[str, str], answer: str | None = None
+    ) -> Program:
+        """Start ``command`` (raises ``OSError`` if it cannot be started). With ``answer``,
+        its standard input is that text and a newline, then its end (``--answer``: what a
+        person would type at the program's prompt)."""
+        if answer is not None and len(answer) > MAX_ANSWER:
+            raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
+        process = subprocess.Popen(
+            split_command(command),
+            env=dict(env),
+            start_new_session=True,
+            stdin=None if answer is None else subprocess.PIPE,
+        )
+        if process.stdin is not None:  # fits the pipe's buffer: never waits for the program
+            with process.stdin:
+                process.stdin.write((answer or "").encode("utf-8") + b"\n")
         return cls(process)
 
     def wait(self, timeout: float | None = None) -> int | None:

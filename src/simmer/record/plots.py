@@ -187,6 +187,17 @@ class RecordedRun:
     commands: list[Command] = field(default_factory=list)
     collisions: list[Mark] = field(default_factory=list)
     reached: list[Mark] = field(default_factory=list)
+    scenario: RecordedScenario | None = None
+    """A project run's start, block and target (the manifest's ``scenario``), if readable."""
+
+
+@dataclass(frozen=True)
+class RecordedScenario:
+    """Where a project run started, where its block lay, and its target zone."""
+
+    start: tuple[float, float, float]
+    block: tuple[float, float]
+    target: str | None
 
 
 @dataclass(frozen=True)
@@ -305,7 +316,22 @@ def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
         trace,
         source if isinstance(source, str) else "",
         kinds,
+        scenario=_scenario(manifest.get("scenario")),
     )
+
+
+def _scenario(value: Any) -> RecordedScenario | None:
+    """A manifest's ``scenario``, or None if it is missing or not numbers where they belong."""
+    if not isinstance(value, dict):
+        return None
+    start, block, target = value.get("start"), value.get("block"), value.get("target")
+    numbers = [*start, *block] if isinstance(start, list) and isinstance(block, list) else []
+    if len(numbers) != 5 or not all(
+        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in numbers
+    ):
+        return None
+    x, y, heading, bx, by = (float(v) for v in numbers)
+    return RecordedScenario((x, y, heading), (bx, by), target if isinstance(target, str) else None)
 
 
 def _read_events(path: Path, run: RecordedRun) -> None:
@@ -464,7 +490,9 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     ax = fig.add_subplot()
     ax.set_facecolor(_rgb(settings.background_color))
     _draw_maze(ax, maze, settings)
-    start, block, wall = _draw_block_and_start(ax, settings)
+    if "gripper" in run.kinds.values():
+        _draw_zones(ax, settings, run.scenario.target if run.scenario else None)
+    start, block, wall = _draw_block_and_start(ax, settings, run.scenario)
     for p in range(trace.parts):
         rows = trace.part == p
         ax.plot(trace.x[rows], trace.y[rows], color=PATH_COLOR, lw=2.4, zorder=4)
@@ -521,16 +549,55 @@ def _draw_maze(ax: Axes, maze: Maze, settings: Settings) -> None:
     ax.add_collection(LineCollection(walls, colors=[_rgb(settings.wall_color)], lw=2.5, zorder=3))
 
 
-def _draw_block_and_start(ax: Axes, settings: Settings) -> tuple[Any, Any, Any]:
-    """The block and the robot's outline and heading at the start; legend entries for the
-    start, the block and the walls."""
+def _draw_zones(ax: Axes, settings: Settings, target: str | None) -> None:
+    """A project's zones as the window draws them: loading blue, drop-off green, the target
+    yellow, each named in its first cell."""
+    from matplotlib.patches import Rectangle
+
+    from simmer.ui.scene import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
+    from simmer.world.zones import Zones
+
+    zones = Zones.from_settings(settings)
+    cell = settings.wall_segment_length
+    for zone in zones.all():
+        color = LOADING_COLOR if zone is zones.loading else DROPOFF_COLOR
+        color = TARGET_COLOR if zone.name == target else color
+        for row, col in zone.cells:
+            ax.add_patch(
+                Rectangle(
+                    (col * cell, row * cell), cell, cell, fc=(*_rgb(color), 0.28), ec="none",
+                    zorder=2.5,
+                )
+            )  # fmt: skip
+        row, col = min(zone.cells)
+        ax.annotate(
+            zone.name,
+            (col * cell + 0.6, row * cell + 0.6),
+            va="top",
+            fontsize=9,
+            color=_rgb(color),
+            fontweight="bold",
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8},
+            zorder=3.2,
+        )
+
+
+def _draw_block_and_start(
+    ax: Axes, settings: Settings, scenario: RecordedScenario | None = None
+) -> tuple[Any, Any, Any]:
+    """The block and the robot's outline and heading at the start (a project run's drawn
+    ones if known); legend entries for the start, the block and the walls."""
     from matplotlib.patches import Polygon
 
     block = Block.from_settings(settings)
+    start = (*settings.robot_start_position, settings.robot_start_rotation)
+    if scenario is not None:
+        block.place(*scenario.block, block.rotation)
+        start = scenario.start
     color = _rgb(settings.block_color)
     ax.add_patch(Polygon(block.polygon, closed=True, fc=color, ec="black", lw=1.0, zorder=5))
-    x, y = settings.robot_start_position
-    _draw_robot(ax, settings, (x, y, settings.robot_start_rotation), START_COLOR, "-")
+    x, y, _ = start
+    _draw_robot(ax, settings, start, START_COLOR, "-")
     ax.plot(x, y, "o", ms=8, mfc=START_COLOR, mec="white", zorder=6)
     return (
         _line(START_COLOR, "o", "start (outline, heading)", mec="white"),

@@ -180,6 +180,7 @@ def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, A
         "simmer_version": simmer.__version__,
         "started": started.isoformat(timespec="seconds"),
         "seed": sim.seed,
+        "scenario": sim.scenario.as_dict(),
         "clock": setup.clock,
         "speed": setup.speed,
         "link_delay": setup.link_delay,
@@ -214,10 +215,12 @@ def load_run(folder: str | Path) -> LoadedRun:
     return LoadedRun(config, int(data["seed"]), read_events(Path(folder) / EVENTS))
 
 
-def start_pose(config: SimConfig) -> Pose:
-    """Where a configuration's robot starts."""
+def start_pose(config: SimConfig, seed: int) -> Pose:
+    """Where a configuration's robot starts with this seed (a project's start may be drawn)."""
     settings = config.settings
-    return Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+    if settings.scenario.start == "config":
+        return Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+    return Simulation(config, seed=seed).scenario.start
 
 
 def retrace(folder: str | Path, path: str | Path) -> Replayed:
@@ -225,7 +228,7 @@ def retrace(folder: str | Path, path: str | Path) -> Replayed:
     ``trace.csv``, or to write one that ``kill -9`` cut short."""
     config, seed, events = load_run(folder)
     writer = TraceWriter(path, sensor_ids(config), config.settings.frame_rate)
-    writer.begin(0.0, 0, start_pose(config))
+    writer.begin(0.0, 0, start_pose(config, seed))
     try:
         return replay(config, seed, events, [writer])
     finally:
@@ -237,6 +240,51 @@ def retrace(folder: str | Path, path: str | Path) -> Replayed:
 
 def _seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.2f} s"
+
+
+def _numbers(value: Any, count: int) -> list[float] | None:
+    """``count`` finite numbers from a list read back from a run folder, else None."""
+    if not isinstance(value, list) or len(value) != count:
+        return None
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return None
+    numbers = [float(v) for v in value]
+    return numbers if all(math.isfinite(v) for v in numbers) else None
+
+
+def _time(value: Any) -> str:
+    """A milestone's time as report.md writes it: ``12.50 s``, or ``no``."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return f"{value:.2f} s"
+    return "no"
+
+
+def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
+    """report.md's project section: the scenario, each milestone with its time, the score
+    (whatever of it the run folder holds in the expected form)."""
+    from simmer.world.outcome import MILESTONE_WORDS
+
+    lines = ["## Project", ""]
+    if isinstance(scenario, dict):
+        start, block = _numbers(scenario.get("start"), 3), _numbers(scenario.get("block"), 2)
+        target = scenario.get("target")
+        if start is not None and block is not None and isinstance(target, str | None):
+            lines += [
+                f"Started at [{start[0]:g}, {start[1]:g}] heading {start[2]:g} deg; the block "
+                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {target}.",
+                "",
+            ]
+    lines += ["| Milestone | Simulated time |", "| --- | --- |"]
+    for name, words in MILESTONE_WORDS.items():
+        lines.append(f"| {words[0].upper() + words[1:]} | {_time(outcome.get(f'{name}_at'))} |")
+    wrong = outcome.get("wrong_zone")
+    if isinstance(wrong, str) and not outcome.get("delivered"):
+        at = _time(outcome.get("wrong_zone_at"))
+        lines.append(f"| Put it down in another drop-off zone | {wrong} at {at} |")
+    score = outcome.get("score")
+    if isinstance(score, int | float) and not isinstance(score, bool):
+        lines += ["", f"**Score: {score:g}** (the rubric is in the manifest).", ""]
+    return lines
 
 
 def write_report_md(folder: str | Path) -> Path:
@@ -285,6 +333,8 @@ def write_report_md(folder: str | Path) -> Path:
         "out (malformed, or an unknown device).",
         "",
     ]
+    if "score" in outcome:
+        lines += project_lines(outcome, info.get("scenario"))
     if report["resets"]:
         count = report["resets"]
         times = "once" if count == 1 else f"{count} times"

@@ -194,7 +194,7 @@ def run_sweep(
                 nonlocal successes
                 successes += result.success
                 kept = keep_files(folder, names[run.key()], result.files) if result.files else ""
-                results.add(row(run, result, kept))
+                results.add(row(run, result, kept, spec.project))
                 advance(successes)
 
             try:

@@ -57,7 +57,83 @@ def draw_pictures(
             _save(_sample_figure(spec, rows), folder / "sampled.png")
             caption = "Success rate against each sampled key, all settings together"
             drawn.append(("sampled.png", caption))
+        starts = [r for r in rows if r.get("start_x")]
+        if spec.project and starts:
+            _save(_start_cells_figure(spec, starts), folder / "start_cells.png")
+            caption = (
+                "Success rate by start cell (all headings together), and the rate of each "
+                "milestone: from where does the program fail?"
+            )
+            drawn.append(("start_cells.png", caption))
     return drawn
+
+
+START_PANELS = (
+    ("success", "success"),
+    ("entered_loading", "entered the loading zone"),
+    ("picked_up", "picked up the block"),
+    ("left_loading", "left the loading zone holding it"),
+    ("delivered", "delivered to the target"),
+)
+"""The start-cell pictures: success, then each project milestone."""
+
+
+def _start_cells_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure:
+    """The maze once per panel of :data:`START_PANELS`, each start cell coloured by the rate
+    of runs starting there that met it (red 0 to green 1), with ``k/n`` written in it."""
+    from matplotlib import colormaps
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    from simmer.sweep.runs import build_config
+    from simmer.world.maze import Maze
+    from simmer.world.zones import Zones
+
+    settings = build_config(str(spec.configs[0]), ()).settings
+    maze = Maze.from_settings(settings)
+    zones = Zones.from_settings(settings)
+    cell = maze.cell
+    by_cell: dict[tuple[int, int], list[Mapping[str, str]]] = {}
+    for r in rows:
+        place = (int(float(r["start_y"]) // cell), int(float(r["start_x"]) // cell))
+        by_cell.setdefault(place, []).append(r)
+    cmap = colormaps["RdYlGn"]
+    panel_height = 4.2 * maze.height / maze.width + 0.5
+    fig = Figure(figsize=(8.0, panel_height * len(START_PANELS)), layout="constrained")
+    for i, (column, title) in enumerate(START_PANELS):
+        ax = fig.add_subplot(len(START_PANELS), 1, i + 1)
+        for row, col in zip(*np.nonzero(maze.solid), strict=True):
+            ax.add_patch(Rectangle((col * cell, row * cell), cell, cell, fc="#555555"))
+        for zone in zones.all():
+            for row, col in zone.cells:
+                ax.add_patch(
+                    Rectangle((col * cell, row * cell), cell, cell, fc="#dde6f5", ec="none")
+                )
+            row, col = min(zone.cells)
+            ax.text(col * cell + 0.8, row * cell + 0.8, zone.name, va="top", fontsize=7)
+        met_total = 0
+        for (row, col), runs in by_cell.items():
+            met = sum(r.get(column) == "True" for r in runs)
+            met_total += met
+            rate = met / len(runs)
+            ax.add_patch(Rectangle((col * cell, row * cell), cell, cell, fc=cmap(rate), ec="white"))
+            ax.text(
+                (col + 0.5) * cell,
+                (row + 0.5) * cell,
+                f"{met}/{len(runs)}",
+                ha="center",
+                va="center",
+                fontsize=8,
+            )
+        for x1, y1, x2, y2 in maze.segments:
+            ax.plot([x1, x2], [y1, y2], color="black", lw=2)
+        ax.set_xlim(-1, maze.width + 1)
+        ax.set_ylim(maze.height + 1, -1)  # +y down the page, as in the window
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_title(f"{title}: {met_total}/{len(rows)} runs", fontsize=9)
+    return fig
 
 
 def _save(fig: Figure, target: Path) -> None:
@@ -125,10 +201,11 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     ax = fig.add_subplot()
     for x1, y1, x2, y2 in maze.segments:
         ax.plot([x1, x2], [y1, y2], color="black", lw=2)
-    bx, by = settings.block_position
-    ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")
-    sx, sy = settings.robot_start_position
-    ax.plot(sx, sy, "^", ms=9, mfc="none", mec="#555555", label="start")
+    if not spec.project:  # a project run's block and start may be drawn: each its own
+        bx, by = settings.block_position
+        ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")
+        sx, sy = settings.robot_start_position
+        ax.plot(sx, sy, "^", ms=9, mfc="none", mec="#555555", label="start")
     groups = [("", "o", "success", SUCCESS_COLOR)] + [
         (kind, marker, name, FAILURE_COLOR) for kind, (marker, name) in FAILURE_MARKERS.items()
     ]

@@ -17,7 +17,13 @@ from typing import IO, Any
 
 from simmer.sweep.runs import RunResult, RunSpec
 from simmer.sweep.spec import SweepSpec
-from simmer.sweep.success import FAILURES, OUTCOME_FIELDS, failure_kind, flat_outcome
+from simmer.sweep.success import (
+    FAILURES,
+    OUTCOME_FIELDS,
+    PROJECT_FIELDS,
+    failure_kind,
+    flat_outcome,
+)
 
 __all__ = [
     "RUNS",
@@ -67,7 +73,8 @@ def wilson_interval(successes: int, trials: int, z: float = Z95) -> tuple[float,
 def header(spec: SweepSpec) -> list[str]:
     """results.csv's columns: the swept keys, seed, success and how the run failed, the
     outcome, then the run's own (status, exit status, wall time, key, folder, output)."""
-    return [*spec.columns, "seed", "success", "failure", *OUTCOME_FIELDS, *TAIL_COLUMNS]
+    project = PROJECT_FIELDS if spec.project else ()
+    return [*spec.columns, "seed", "success", "failure", *OUTCOME_FIELDS, *project, *TAIL_COLUMNS]
 
 
 def _cell(value: Any) -> str:
@@ -79,20 +86,23 @@ def _cell(value: Any) -> str:
     return str(value)
 
 
-def outcome_cells(result: RunResult) -> list[str]:
-    """A run's outcome as results.csv has it (:data:`OUTCOME_FIELDS`' columns)."""
+def outcome_cells(result: RunResult, project: bool = False) -> list[str]:
+    """A run's outcome as results.csv has it (:data:`OUTCOME_FIELDS`' columns, and with
+    ``project`` :data:`PROJECT_FIELDS`')."""
     fields = flat_outcome(result.outcome)
-    return [_cell(fields.get(name)) for name in OUTCOME_FIELDS]
+    names = (*OUTCOME_FIELDS, *PROJECT_FIELDS) if project else OUTCOME_FIELDS
+    return [_cell(fields.get(name)) for name in names]
 
 
-def row(run: RunSpec, result: RunResult, folder: str = "") -> list[str]:
-    """One run's row of results.csv (``folder``: its kept folder, relative to the sweep's)."""
+def row(run: RunSpec, result: RunResult, folder: str = "", project: bool = False) -> list[str]:
+    """One run's row of results.csv (``folder``: its kept folder, relative to the sweep's;
+    ``project``: with the project's columns)."""
     return [
         *map(_cell, run.setting),
         str(run.seed),
         str(result.success),
         failure_kind(result.status, flat_outcome(result.outcome), result.success),
-        *outcome_cells(result),
+        *outcome_cells(result, project),
         result.status,
         _cell(result.exit_status),
         f"{result.wall_time:.3f}",

@@ -80,6 +80,8 @@ class RunSpec:
     decides with it whether the run is a failure to keep."""
     keep: Keep = "nothing"
     """Whose files come back with the result: no run's, failures' or every run's."""
+    answer: str | None = None
+    """What the program reads at its prompt (``{target}``: the run's target zone)."""
 
     def key(self) -> str:
         """A stable hash of everything that decides the run's outcome, and of the sample's draw
@@ -95,6 +97,8 @@ class RunSpec:
         }
         if self.sample is not None:
             described["sample"] = self.sample
+        if self.answer is not None:
+            described["answer"] = self.answer
         text = json.dumps(described, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -367,6 +371,9 @@ def _run_program(
 
     if extras.video is not None:
         _headless_pygame()
+    answer = run.answer
+    if answer is not None and sim.scenario.target is not None:
+        answer = answer.replace("{target}", sim.scenario.target)
     served = serve(
         sim,
         window=False,
@@ -381,6 +388,7 @@ def _run_program(
         timeout=run.wall_seconds,
         record=extras.record,
         video=extras.video,
+        answer=answer,
     )
     if served.ended_by == "quit":  # Ctrl-C or a signal stopped this worker: no result
         raise KeyboardInterrupt

@@ -81,6 +81,7 @@ KNOWN_KEYS = frozenset(
         "success",
         "keep",
         "videos",
+        "answer",
     }
 )
 KEEPS: tuple[Keep, ...] = get_args(Keep)
@@ -139,6 +140,11 @@ class SweepSpec:
     sample_seed: int = 0
     keep: Keep = "failures"
     videos: int = 0
+    answer: str | None = None
+    """What each run's program reads at its prompt; ``{target}`` is the run's target zone."""
+    project: bool = False
+    """The (first) configuration is the course project's (a robot with a gripper): results.csv
+    has the project's columns and the summary its start-cell pictures."""
 
     @property
     def setting_columns(self) -> tuple[str, ...]:
@@ -192,6 +198,7 @@ class SweepSpec:
                                 sample=number,
                                 success=self.success,
                                 keep=self.keep,
+                                answer=self.answer,
                             )
                         )
         return runs
@@ -294,7 +301,8 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
         raise SweepError(f"{kind}: a non-empty string")
     if kind == "policy" and not _is_target(controller):
         raise SweepError(f'policy: "module:function", not {controller!r}')
-    grid = _grid(data.get("grid", {}))
+    project = _is_project(paths[0])
+    grid = _grid(_every_scenario(data.get("grid", {}), paths[0]))
     count, sample = _sample(data.get("sample", {}), {key for key, _ in grid})
     if "sample_seed" in data and not sample:
         raise SweepError("sample_seed: seeds the [sample] table's draws, and there is none")
@@ -324,7 +332,70 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
         sample_seed=_count(data, "sample_seed", 0),
         keep=keep,
         videos=videos,
+        answer=_answer(data.get("answer"), kind),
+        project=project,
     )
+
+
+def _answer(value: Any, kind: ControllerKind) -> str | None:
+    if value is None:
+        return None
+    if kind != "program":
+        raise SweepError("answer: what a program reads at its prompt; a policy has none")
+    if not isinstance(value, str) or len(value) > 4096:
+        raise SweepError(
+            f'answer: text such as "{{target}}" (at most 4,096 characters), not {value!r}'
+        )
+    return value
+
+
+def _is_project(config: Path) -> bool:
+    """Whether a configuration is the course project's (a robot with a gripper)."""
+    from simmer.config import load_config
+    from simmer.errors import ConfigError
+    from simmer.world.zones import project_run
+
+    try:
+        return project_run(load_config(config))
+    except ConfigError:
+        return False  # check_settings says what is wrong with it
+
+
+EVERY = "all"
+"""A grid's value for ``scenario.start`` (every start cell at each of four headings) or
+``scenario.target`` (every drop-off zone)."""
+
+
+def _every_scenario(grid: Any, config: Path) -> Any:
+    """The grid with ``scenario.start = "all"`` and ``scenario.target = "all"`` written out
+    from the (first) configuration's zones."""
+    if not isinstance(grid, dict):
+        return grid
+    entries = dict(_dotted(grid, lambda _table: False))
+    wanted = [key for key in ("scenario.start", "scenario.target") if entries.get(key) == EVERY]
+    if not wanted:
+        return grid
+    from simmer.config import load_config
+    from simmer.config.project import HEADINGS
+    from simmer.errors import ConfigError
+    from simmer.world.maze import Maze
+    from simmer.world.scenario import start_cells
+    from simmer.world.zones import Zones
+
+    try:
+        settings = load_config(config).settings
+    except ConfigError as exc:
+        raise SweepError(f"{wanted[0]} = {EVERY!r} needs a valid configuration: {exc}") from None
+    zones = Zones.from_settings(settings)
+    for key in wanted:
+        if key == "scenario.target":
+            entries[key] = sorted(zones.dropoff)
+        else:
+            cells = start_cells(settings, Maze.from_settings(settings), zones, "random")
+            entries[key] = [f"{r},{c},{h:g}" for r, c in cells for h in HEADINGS]
+        if not entries[key]:
+            raise SweepError(f"[grid] {key} = {EVERY!r}: {config.name} has none")
+    return entries
 
 
 def _did_you_mean(word: str, choices: Any) -> str:

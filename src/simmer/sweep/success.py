@@ -34,6 +34,28 @@ OUTCOME_FIELDS = (
 )
 """The outcome's fields as results.csv has them (the final pose in three columns); the names
 a success condition may use."""
+PROJECT_FIELDS = (
+    "target",
+    "start_x",
+    "start_y",
+    "start_heading",
+    "block_x",
+    "block_y",
+    "entered_loading",
+    "entered_loading_at",
+    "picked_up",
+    "picked_up_at",
+    "left_loading",
+    "left_loading_at",
+    "delivered",
+    "delivered_at",
+    "wrong_zone",
+    "wrong_zone_at",
+    "score",
+)
+"""A project run's fields besides (:class:`~simmer.world.outcome.ProjectReport`): columns of a
+project sweep's results.csv, and names a success condition may use
+(``delivered and collisions == 0``); in another run they have no value."""
 FAILURES = {
     "collision": "collided with a wall or the block",
     "timeout": "stopped by the simulated-time or the wall-clock limit",
@@ -113,8 +135,9 @@ def succeeded(condition: str, outcome: Mapping[str, Any] | None) -> bool:
 
 def _check(node: ast.expr, text: str) -> None:
     if isinstance(node, ast.Name):
-        if node.id not in OUTCOME_FIELDS and node.id not in ("true", "false"):
-            raise SweepError(f"success: {node.id!r} is not one of {', '.join(OUTCOME_FIELDS)}")
+        known = (*OUTCOME_FIELDS, *PROJECT_FIELDS)
+        if node.id not in known and node.id not in ("true", "false"):
+            raise SweepError(f"success: {node.id!r} is not one of {', '.join(known)}")
         return
     if isinstance(node, ast.Constant):
         if isinstance(node.value, int | float):  # bool included

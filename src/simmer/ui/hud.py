@@ -155,7 +155,10 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
     r.draw_text("h: help", (12, 78), DIM, 20)
-    for label, y in zip(("time", "Task 2 stopwatch", "true pose", "collisions"), ROWS, strict=True):
+    from simmer.world.zones import project_run
+
+    second = "project" if project_run(scene.config) else "Task 2 stopwatch"
+    for label, y in zip(("time", second, "true pose", "collisions"), ROWS, strict=True):
         r.draw_text(label, (LABEL_X, y), DIM, 22)
     r.draw_text("path", (PATH_LABEL_X, ROWS[3]), DIM, 22)
     r.draw_text("last commands -> replies", (COMMANDS_X, ROWS[0]), DIM, 20)
@@ -242,11 +245,33 @@ def stopwatch_text(outcome: OutcomeReport) -> tuple[str, Color]:
     return f"reached the block in {outcome.task2_time:.2f} s", LIT
 
 
+PROJECT_WORDS = {
+    "entered_loading": "in",
+    "picked_up": "picked",
+    "left_loading": "out",
+    "delivered": "delivered",
+}
+"""The project's milestones as the HUD names them, in order."""
+
+
+def project_text(outcome: OutcomeReport) -> tuple[str, Color]:
+    """The project line: the target, the score and the milestones met so far (the times are
+    in the outcome the run prints and in report.md)."""
+    project = outcome.project
+    assert project is not None
+    met = [word for name, word in PROJECT_WORDS.items() if getattr(project, name)]
+    if project.wrong_zone is not None and not project.delivered:
+        met.append(f"in {project.wrong_zone}, not the target")
+    done = " | ".join(met) if met else "no milestone yet"
+    color = LIT if project.delivered else TEXT
+    return f"target {project.target or '-'}  score {project.score:g}  {done}", color
+
+
 def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
     """The run's outcome: Task 2 stopwatch, collisions (and when the first was), path length,
     and how many replies were busy (a drive still moving) or NaN."""
-    watch, color = stopwatch_text(outcome)
-    r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
+    watch, color = stopwatch_text(outcome) if outcome.project is None else project_text(outcome)
+    r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22 if outcome.project is None else 20)
     collisions = str(outcome.collisions)
     if outcome.first_collision is not None:
         collisions += f" (first at {outcome.first_collision:.2f} s)"

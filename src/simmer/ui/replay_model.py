@@ -162,6 +162,7 @@ class Frame:
             commands=self.commands,
             switched_off=self.switched_off,
             trail=self.trail,
+            target=self.outcome.project.target if self.outcome and self.outcome.project else None,
         )
 
 

@@ -17,6 +17,7 @@ from simmer.devices.base import Circle, Segment
 from simmer.geometry import FloatArray
 from simmer.ui.render import Color, Point, Renderer
 from simmer.ui.snapshot import HasScene, Snapshot
+from simmer.world.zones import Zone, Zones, zones_shown
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""
@@ -26,6 +27,16 @@ GHOST_COLOR: Color = (255, 90, 90)
 RULER_COLOR: Color = (220, 235, 235)
 TRAIL_COLOR: Color = (255, 140, 0)
 """The path driven so far: orange, as on path.png, visible on white and black tiles."""
+LOADING_COLOR: Color = (40, 110, 230)
+"""The loading zone's outline on the floor: blue."""
+DROPOFF_COLOR: Color = (20, 170, 60)
+"""A drop-off zone's outline: green."""
+TARGET_COLOR: Color = (250, 200, 0)
+"""The run's target zone: yellow, over its green outline."""
+ZONE_INSET = 0.7
+"""Inches between a zone's outline and the walls, so both show."""
+ZONE_LINE = 0.45
+"""Inches: the width of a zone's outline."""
 
 
 @dataclass(frozen=True)
@@ -100,6 +111,7 @@ class ScenePainter:
         self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
         self.panel_color = tint(settings.background_color, 0.6, (0, 0, 0))
         self.block_edge = tint(settings.block_color, 0.5, (0, 0, 0))
+        self.zones = Zones.from_settings(settings) if zones_shown(scene.config) else None
 
     def colors(self) -> list[Color]:
         """The flat colours this painter paints with (a GIF's palette keeps them exact)."""
@@ -118,6 +130,9 @@ class ScenePainter:
             self.robot_fill,
             GHOST_COLOR,
             TRAIL_COLOR,
+            LOADING_COLOR,
+            DROPOFF_COLOR,
+            TARGET_COLOR,
         ]
 
     # ----------------------------------------------------------------- static layer
@@ -144,12 +159,45 @@ class ScenePainter:
                 (round(x0), round(y0), round(x1) - round(x0), round(y1) - round(y0)),
                 self.solid_color,
             )
+        if self.zones is not None:
+            for zone in self.zones.all():
+                color = LOADING_COLOR if zone is self.zones.loading else DROPOFF_COLOR
+                self.paint_zone(r, view, zone, color)
         half = settings.wall_thickness / 2
         for x1, y1, x2, y2 in maze.segments.tolist():
             a = view.point(min(x1, x2) - half, min(y1, y2) - half)
             b = view.point(max(x1, x2) + half, max(y1, y2) + half)
             r.draw_rect((a[0], a[1], b[0] - a[0], b[1] - a[1]), settings.wall_color)
         self._paint_rulers(r, view)
+
+    def paint_zone(self, r: Renderer, view: View, zone: Zone, color: Color) -> None:
+        """A zone's outline just inside its cells (no line between two of its cells), and its
+        name in its first cell's corner."""
+        cell = self.maze.cell
+        cells = set(zone.cells)
+        width = view.width(ZONE_LINE)
+        inset = ZONE_INSET
+        for row, col in zone.cells:
+            x0, y0 = col * cell + inset, row * cell + inset
+            x1, y1 = (col + 1) * cell - inset, (row + 1) * cell - inset
+            # extend along a side shared with the zone's next cell, so the outline is unbroken
+            left = x0 - 2 * inset if (row, col - 1) in cells else x0
+            right = x1 + 2 * inset if (row, col + 1) in cells else x1
+            top = y0 - 2 * inset if (row - 1, col) in cells else y0
+            bottom = y1 + 2 * inset if (row + 1, col) in cells else y1
+            sides = [
+                ((row - 1, col), (left, y0), (right, y0)),
+                ((row + 1, col), (left, y1), (right, y1)),
+                ((row, col - 1), (x0, top), (x0, bottom)),
+                ((row, col + 1), (x1, top), (x1, bottom)),
+            ]
+            for near, a, b in sides:
+                if near not in cells:
+                    r.draw_segment(view.point(*a), view.point(*b), color, width)
+        row, col = min(zone.cells)
+        size = max(10, round(view.ppi * 1.1))
+        corner = view.point(col * cell + 2 * inset, row * cell + 2 * inset)
+        r.draw_text(zone.name, corner, color, size)
 
     def _paint_rulers(self, r: Renderer, view: View) -> None:
         """Inch marks every cell along the top and left borders, if there is room."""
@@ -181,6 +229,8 @@ class ScenePainter:
     def paint_dynamic(self, r: Renderer, view: View, snap: Snapshot) -> None:
         """Block, robot (with a heading mark), visible devices, measurements, drag ghost."""
         settings = self.settings
+        if self.zones is not None and snap.target in self.zones.dropoff:
+            self.paint_zone(r, view, self.zones.dropoff[snap.target], TARGET_COLOR)
         block_px = view.points(snap.block)
         r.draw_polygon(block_px, settings.block_color)
         r.draw_polygon(block_px, self.block_edge, view.width(settings.block_thickness))

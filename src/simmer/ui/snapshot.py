@@ -143,6 +143,8 @@ class Snapshot:
     to (shown in the HUD for a few seconds)."""
     trail: TrailView | None = None
     """The path driven so far, if something keeps it."""
+    target: str | None = None
+    """The project's target zone (drawn in yellow), if the run has one."""
 
     @property
     def outline(self) -> FloatArray:
@@ -189,4 +191,5 @@ class Snapshot:
             recording=recording,
             notice=notice,
             trail=trail,
+            target=sim.scenario.target,
         )

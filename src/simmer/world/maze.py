@@ -11,11 +11,13 @@ from simmer.config.models import Settings
 from simmer.geometry import (
     BoolArray,
     FloatArray,
+    Pose,
     heading_vector,
     place_polygon,
     ray_grid,
     ray_segments,
     rectangle,
+    rotate,
 )
 
 
@@ -148,6 +150,8 @@ class Block:
     size: float
     polygon: FloatArray = field(init=False)
     segments: FloatArray = field(init=False)
+    held: Pose | None = field(init=False, default=None)
+    """While a gripper holds the block: its pose in the robot's frame (it moves with the robot)."""
 
     def __post_init__(self) -> None:
         self.place(self.x, self.y, self.rotation)
@@ -158,12 +162,41 @@ class Block:
         x, y = settings.block_position
         return cls(x, y, settings.block_rotation, settings.block_size)
 
+    @property
+    def local(self) -> FloatArray:
+        """The block's outline in its own frame."""
+        return rectangle(self.size, self.size)
+
     def place(self, x: float, y: float, rotation: float) -> None:
         """Move the block (keeps its outline and edge segments in step)."""
         self.x, self.y, self.rotation = x, y, rotation
         self.polygon = np.empty((4, 2))
-        place_polygon(rectangle(self.size, self.size), x, y, rotation, self.polygon)
+        place_polygon(self.local, x, y, rotation, self.polygon)
         self.segments = np.hstack((self.polygon, np.roll(self.polygon, -1, axis=0)))
+
+    def carry_to(self, pose: Pose, polygon: FloatArray) -> None:
+        """Move the held block to ``pose`` whose outline, already placed, is ``polygon``
+        (each step of a carried block: no new arrays)."""
+        self.x, self.y, self.rotation = pose
+        self.polygon[:] = polygon
+        self.segments[:, :2] = polygon
+        self.segments[:-1, 2:] = polygon[1:]
+        self.segments[-1, 2:] = polygon[0]
+
+    def hold(self, robot: Pose) -> None:
+        """A gripper took the block: from now on it keeps its pose relative to the robot."""
+        local = rotate(self.x - robot.x, self.y - robot.y, -robot.heading)
+        self.held = Pose(local.x, local.y, self.rotation - robot.heading)
+
+    def release(self) -> None:
+        """The gripper let go: the block stays where it is."""
+        self.held = None
+
+    def carried_pose(self, robot: Pose) -> Pose:
+        """Where the held block is when the robot is at ``robot``."""
+        assert self.held is not None
+        offset = rotate(self.held.x, self.held.y, robot.heading)
+        return Pose(robot.x + offset.x, robot.y + offset.y, self.held.heading + robot.heading)
 
     def cast_ray(self, x: float, y: float, heading: float) -> float:
         """Distance from (x, y) along ``heading`` to the block's outline; inf if it misses."""

@@ -30,6 +30,7 @@ from simmer.world.events import (
     ResetEvent,
     StepEvent,
 )
+from simmer.world.zones import project_run
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
@@ -67,11 +68,16 @@ class OutcomeReport:
     busy_replies: int = 0
     """Drive commands refused (NaN) because a drive was still moving: a program polling
     ``w0-0`` until its move is done gets these, and nothing is wrong."""
+    project: ProjectReport | None = None
+    """The course project's milestones and score (None unless the robot has a gripper and the
+    maze has zones: a Lab 1 run's outcome is as before)."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
         data = asdict(self)
         data["final_pose"] = list(self.final_pose)
+        project = data.pop("project")
+        data.update(project or {})
         return data
 
     def summary(self) -> str:
@@ -86,9 +92,11 @@ class OutcomeReport:
             f" (first at {self.first_collision:.2f} s)" if self.first_collision is not None else ""
         )
         x, y, heading = self.final_pose
+        project = [self.project.summary()] if self.project is not None else []
         return "\n".join(
             [
                 f"outcome after {self.time:.2f} s: {task2}",
+                *project,
                 f"  collisions {self.collisions}{first}, {self.blocked_steps} steps blocked; "
                 f"path {self.path_length:.1f} in",
                 f"  {self.messages} messages, {self.commands} commands, "
@@ -96,6 +104,55 @@ class OutcomeReport:
                 f"replies; final pose x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg",
             ]
         )
+
+
+MILESTONES = ("entered_loading", "picked_up", "left_loading", "delivered")
+"""The project's milestones in the order a run meets them (each has an ``_at`` time)."""
+MILESTONE_WORDS = {
+    "entered_loading": "entered the loading zone",
+    "picked_up": "picked up the block",
+    "left_loading": "left the loading zone holding it",
+    "delivered": "delivered it",
+}
+
+
+@dataclass(frozen=True)
+class ProjectReport:
+    """The course project's milestones (simulated seconds, None if not met) and score."""
+
+    target: str | None
+    start_x: float
+    start_y: float
+    start_heading: float
+    block_x: float
+    block_y: float
+    """Where the run started and where the block lay (the scenario: drawn or given)."""
+    entered_loading: bool
+    entered_loading_at: float | None
+    picked_up: bool
+    picked_up_at: float | None
+    left_loading: bool
+    left_loading_at: float | None
+    delivered: bool
+    delivered_at: float | None
+    wrong_zone: str | None
+    """The drop-off zone the block was put down in instead of the target (None if none)."""
+    wrong_zone_at: float | None
+    score: float
+
+    def summary(self) -> str:
+        """One line: milestones with their times, then the score."""
+        met = [
+            f"{MILESTONE_WORDS[name]} at {at:.2f} s"
+            for name in MILESTONES
+            if (at := getattr(self, f"{name}_at")) is not None
+        ]
+        if self.wrong_zone is not None and not self.delivered:
+            met.append(
+                f"put it down in {self.wrong_zone} (not the target) at {self.wrong_zone_at:.2f} s"
+            )
+        said = "; ".join(met) if met else "no milestone"
+        return f"  project (target {self.target or 'none'}): {said}; score {self.score:g}"
 
 
 class Outcome:
@@ -109,6 +166,10 @@ class Outcome:
         self.sim = sim
         robot_radius = float(np.sqrt((sim.robot.outline**2).sum(axis=1)).max())
         self._near = robot_radius + sim.block.size * math.sqrt(0.5) + REACH_DISTANCE
+        zones = sim.zones
+        self._zoned = project_run(sim.config) and bool(zones.loading or zones.dropoff)
+        self._loading = frozenset(zones.loading.cells if zones.loading else ())
+        self._cell = zones.cell
         self._clear()
 
     @classmethod
@@ -130,6 +191,9 @@ class Outcome:
         self.busy_replies = 0
         self._blocked_before = self.sim.blocked_steps
         self._last_pose: Pose = self.sim.robot.pose
+        self.milestones: dict[str, float] = {}
+        self.wrong_zone: tuple[str, float] | None = None
+        self._held = False
 
     def __call__(self, event: Event) -> None:
         """Observe one simulation event."""
@@ -146,7 +210,11 @@ class Outcome:
                 task2 = event.time - self.first_motion
                 log.info("reached the block at %.2f s (Task 2 time %.2f s)", event.time, task2)
                 self.sim.emit(ReachedEvent(event.time, task2, event.step))
+            if self._zoned:
+                self._moved(event.time)
         elif isinstance(event, CommandEvent):
+            if self._zoned:
+                self._gripped(event.time)
             self.messages += 1
             self.commands += len(event.replies)
             nan = sum(math.isnan(value) for value in event.replies)
@@ -189,6 +257,74 @@ class Outcome:
             self.first_motion = None
             self.reached_at = None
 
+    def _gripped(self, time: float) -> None:
+        """After a command: the block picked up, or put down (delivered, or in another zone)."""
+        sim = self.sim
+        held = sim.block.held is not None
+        if held == self._held:
+            return
+        self._held = held
+        met = self.milestones
+        if held:
+            met.setdefault("picked_up", time)
+        elif "delivered" not in met:
+            zone = sim.zones.dropoff_at(sim.block.x, sim.block.y)
+            if zone is not None and zone == sim.scenario.target:
+                met["delivered"] = time
+            elif zone is not None and self.wrong_zone is None:
+                self.wrong_zone = (zone, time)
+
+    def _moved(self, time: float) -> None:
+        """After a step: the loading zone entered, or left holding the block (checked only
+        while one of them is still to come: a step costs little)."""
+        met = self.milestones
+        entering = "entered_loading" not in met
+        leaving = self._held and "left_loading" not in met
+        if not (entering or leaving):
+            return
+        pose = self.sim.robot.pose
+        inside = (int(pose.y // self._cell), int(pose.x // self._cell)) in self._loading
+        if inside and entering:
+            met["entered_loading"] = time
+        elif leaving and not inside:
+            met["left_loading"] = time
+
+    def project_report(self) -> ProjectReport | None:
+        """The milestones and score so far (None unless this is a project run with zones)."""
+        if not self._zoned:
+            return None
+        rubric = self.sim.config.settings.score
+        met = {k: t for k, t in self.milestones.items() if t <= rubric.time_limit}
+        delivered = "delivered" in met
+        wrong = (
+            self.wrong_zone if self.wrong_zone and self.wrong_zone[1] <= rubric.time_limit else None
+        )
+        score = sum(getattr(rubric, name) for name in met)
+        if wrong is not None and not delivered:
+            score += rubric.wrong_zone
+        score += rubric.collision * self.collisions
+        at = self.milestones.get
+        scenario = self.sim.scenario
+        return ProjectReport(
+            target=scenario.target,
+            start_x=scenario.start.x,
+            start_y=scenario.start.y,
+            start_heading=scenario.start.heading,
+            block_x=scenario.block[0],
+            block_y=scenario.block[1],
+            entered_loading="entered_loading" in self.milestones,
+            entered_loading_at=at("entered_loading"),
+            picked_up="picked_up" in self.milestones,
+            picked_up_at=at("picked_up"),
+            left_loading="left_loading" in self.milestones,
+            left_loading_at=at("left_loading"),
+            delivered="delivered" in self.milestones,
+            delivered_at=at("delivered"),
+            wrong_zone=self.wrong_zone[0] if self.wrong_zone else None,
+            wrong_zone_at=self.wrong_zone[1] if self.wrong_zone else None,
+            score=round(score, 6),
+        )
+
     def reached(self) -> bool:
         """True if the robot's outline is within :data:`REACH_DISTANCE` of the block now."""
         sim = self.sim
@@ -222,4 +358,5 @@ class Outcome:
             nan_replies=self.nan_replies,
             final_pose=self.sim.robot.pose,
             busy_replies=self.busy_replies,
+            project=self.project_report(),
         )

@@ -21,7 +21,14 @@ from simmer.config.loader import load_config
 from simmer.config.models import SimConfig
 from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
 from simmer.errors import CommandError, DeviceKindError, describe_exception
-from simmer.geometry import Pose, robot_blocked, rotate, wrap_degrees
+from simmer.geometry import (
+    Pose,
+    place_polygon,
+    polygon_hits_grid,
+    robot_blocked,
+    rotate,
+    wrap_degrees,
+)
 from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message, printable
 from simmer.world.events import (
     CollisionEndEvent,
@@ -36,6 +43,8 @@ from simmer.world.events import (
 )
 from simmer.world.maze import Block, Maze, robot_outline
 from simmer.world.robot import Robot
+from simmer.world.scenario import Scenario, draw_scenario
+from simmer.world.zones import Zones
 
 log = logging.getLogger("simmer")
 
@@ -66,6 +75,7 @@ class Simulation:
         else:
             self.seed = settings.seed if settings.seed is not None else settings.floor_seed
         self.maze = Maze.from_settings(settings)
+        self.zones = Zones.from_settings(settings)
         self._dt = 1.0 / settings.frame_rate
         self.observers: list[Observer] = []
         self._simulate_list = settings.simulate_list
@@ -91,14 +101,16 @@ class Simulation:
     def _build(self) -> None:
         """Create robot, block and devices at their start, each device with a fresh stream."""
         settings = self.config.settings
-        self._block = Block.from_settings(settings)
+        self.scenario: Scenario = draw_scenario(settings, self.maze, self.zones, self.stream)
+        self._block = Block(*self.scenario.block, settings.block_rotation, settings.block_size)
+        self._carried = np.empty((4, 2))
         devices: list[Device] = []
         for spec in self.config.devices:
             kind = get_device_kind(spec.kind)
             if kind is None:
                 raise DeviceKindError(f"device kind {spec.kind!r} is no longer registered")
             devices.append(kind(spec.id, spec.params, self.stream(f"device:{spec.id}")))
-        start = Pose(*settings.robot_start_position, wrap_degrees(settings.robot_start_rotation))
+        start = self.scenario.start
         self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
         self._switched_off: dict[str, str] = {}
         self._updating = list(self._robot.updating)
@@ -362,19 +374,7 @@ class Simulation:
         pose = robot.pose
         offset = rotate(dx, dy, pose.heading)
         target = Pose(pose.x + offset.x, pose.y + offset.y, wrap_degrees(pose.heading + rotation))
-        maze = self.maze
-        if robot_blocked(
-            robot.outline,
-            target.x,
-            target.y,
-            target.heading,
-            robot.scratch,
-            maze.hwall,
-            maze.vwall,
-            maze.solid,
-            maze.cell,
-            self._block.polygon,
-        ):
+        if self._blocked(target):
             self.blocked_steps += 1
             if not self._was_blocked:
                 self.collisions += 1
@@ -388,6 +388,35 @@ class Simulation:
                 self.emit(CollisionEndEvent(self._time, target, self.frame))
         robot.pose = target
         robot.turned = rotation
+        block = self._block
+        if block.held is not None:  # _blocked placed its outline at the target
+            block.carry_to(block.carried_pose(target), self._carried)
+
+    def _blocked(self, target: Pose) -> bool:
+        """True if the robot at ``target`` would touch a wall or the block, or the block it
+        holds would touch a wall."""
+        robot = self._robot
+        maze = self.maze
+        block = self._block
+        if block.held is None:
+            return robot_blocked(
+                robot.outline,
+                target.x,
+                target.y,
+                target.heading,
+                robot.scratch,
+                maze.hwall,
+                maze.vwall,
+                maze.solid,
+                maze.cell,
+                block.polygon,
+            )
+        place_polygon(robot.outline, target.x, target.y, target.heading, robot.scratch)
+        if polygon_hits_grid(robot.scratch, maze.hwall, maze.vwall, maze.solid, maze.cell):
+            return True
+        carried = block.carried_pose(target)
+        place_polygon(block.local, carried.x, carried.y, carried.heading, self._carried)
+        return polygon_hits_grid(self._carried, maze.hwall, maze.vwall, maze.solid, maze.cell)
 
     # ----------------------------------------------------------------- manual control
 
@@ -416,23 +445,13 @@ class Simulation:
 
     def place_robot(self, x: float, y: float, heading: float) -> bool:
         """Move the robot to a pose if it fits there (no wall, block or outside); True if moved."""
-        maze = self.maze
         robot = self._robot
-        heading = wrap_degrees(heading)
-        if robot_blocked(
-            robot.outline,
-            x,
-            y,
-            heading,
-            robot.scratch,
-            maze.hwall,
-            maze.vwall,
-            maze.solid,
-            maze.cell,
-            self._block.polygon,
-        ):
+        pose = Pose(x, y, wrap_degrees(heading))
+        if self._blocked(pose):
             return False
-        robot.pose = Pose(x, y, heading)
+        robot.pose = pose
+        if self._block.held is not None:  # _blocked placed its outline at the pose
+            self._block.carry_to(self._block.carried_pose(pose), self._carried)
         if self.observers:
             self.emit(PlaceEvent(self._time, robot.pose, self.frame))
         return True
