@@ -154,7 +154,7 @@ def _column(sim: Simulation, device: Any, poses: FloatArray, block: bool) -> Flo
     elif isinstance(device, Infrared):
         maze = sim.maze
         for i, pose in enumerate(poses):
-            x, y, _ = device.world_pose(pose)  # type: ignore[arg-type]
+            x, y, _ = device.world_pose(pose)
             fraction = white_fraction(maze.floor_white, maze.tile, x, y, device.radius, _DISK)
             column[i] = 1.0 if fraction >= device.settings.threshold else 0.0
     elif isinstance(device, Compass):

@@ -44,10 +44,10 @@ def device_mount(device: Device, sim: Simulation) -> dict[str, Any]:
             num_rays=s.num_rays,
         )
     elif isinstance(device, Infrared):
-        s = device.settings
-        mount.update(radius=device.radius, fov=s.fov, threshold=s.threshold)
+        floor = device.settings
+        mount.update(radius=device.radius, fov=floor.fov, threshold=floor.threshold)
         if mount["height"] is None:
-            mount["height"] = s.height
+            mount["height"] = floor.height
     return mount
 
 

@@ -31,6 +31,13 @@ class LocalLink:
         self.runner.catch_up()
         return request.future.result()
 
+    def ask(self, message: str) -> tuple[list[float], str | None]:
+        """A localization message (``%maze``, ``%show``, ``%pose``): its values, or its text;
+        it costs no simulated time."""
+        request = Request(Decoded(message, 1, meta=True), "local")
+        self.runner.handle(request)
+        return request.future.result(), (request.answer[0] if request.answer else None)
+
     def clock(self, message: str) -> float:
         """Send a clock message; the simulated time after it."""
         (value,) = self.exchange(message)
