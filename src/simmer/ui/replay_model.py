@@ -35,6 +35,7 @@ import simmer
 from simmer.devices.base import Circle, Segment, Shape
 from simmer.errors import ConfigError, ReplayError
 from simmer.geometry import FloatArray, Pose, Vec2
+from simmer.localize.belief import Belief
 from simmer.record.runfolder import (
     EVENTS,
     MANIFEST,
@@ -123,6 +124,7 @@ class Frame:
     commands: tuple[CommandEvent, ...]
     switched_off: tuple[tuple[str, str], ...]
     trail: TrailView | None
+    belief: Belief | None
 
     @classmethod
     def of(cls, snap: Snapshot, previous: Frame | None = None) -> Frame:
@@ -144,6 +146,7 @@ class Frame:
             commands=commands,
             switched_off=snap.switched_off,
             trail=snap.trail,
+            belief=snap.belief,
         )
 
     def snapshot(self, *, paused: bool = False, speed: float = 1.0) -> Snapshot:
@@ -162,6 +165,7 @@ class Frame:
             commands=self.commands,
             switched_off=self.switched_off,
             trail=self.trail,
+            belief=self.belief,
             target=self.outcome.project.target if self.outcome and self.outcome.project else None,
         )
 
