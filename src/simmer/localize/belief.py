@@ -199,12 +199,15 @@ class BeliefBoard:
     def __init__(self) -> None:
         self.belief: Belief | None = None
         self.bad = 0
+        self.first_problem = ""
+        """Why the first belief that did not read did not."""
 
     def __call__(self, event: Event) -> None:
         if type(event) is BeliefEvent:
             try:
                 self.belief = parse_belief(event.belief)[0]
-            except ValueError:
+            except ValueError as exc:
                 self.bad += 1
+                self.first_problem = self.first_problem or f"at {event.time:.2f} s: {exc}"
         elif isinstance(event, ResetEvent):
             self.belief = None

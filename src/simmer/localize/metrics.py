@@ -9,6 +9,7 @@ an :class:`~simmer.world.events.EstimateEvent` with the true pose beside it. A r
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,6 +33,18 @@ def errors(estimate: Pose, truth: Pose) -> tuple[float, float]:
 def within(position: float, heading: float) -> bool:
     """Whether errors count as localized."""
     return position <= POSITION_TOLERANCE and heading <= HEADING_TOLERANCE
+
+
+def localized_at(series: Sequence[tuple[float, float, float]]) -> float | None:
+    """The time of the first of ``series``' (time, inches, degrees) after which every one is
+    within the tolerances (None: the last is not)."""
+    since = None
+    for time, position, heading in series:
+        if not within(position, heading):
+            since = None
+        elif since is None:
+            since = time
+    return since
 
 
 @dataclass(frozen=True)

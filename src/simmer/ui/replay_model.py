@@ -57,6 +57,8 @@ from simmer.world.events import CommandEvent, Event, ResetEvent
 from simmer.world.outcome import OutcomeReport
 from simmer.world.replay import feed, same_replies
 
+log = logging.getLogger("simmer.replay")
+
 __all__ = [
     "FPS",
     "SPEEDS",
@@ -376,6 +378,14 @@ class Recording:
         )
         if incomplete is not None:
             incomplete += f"; replayed up to {collector.offset + sim.time:.2f} s"
+        beliefs = collector.maker.beliefs
+        if beliefs.bad:
+            log.warning(
+                "%d shown belief(s) in %s could not be read and are not drawn (the first %s)",
+                beliefs.bad,
+                folder / EVENTS,
+                beliefs.first_problem,
+            )
         commands = _commands(collector, events)
         check = Check(
             rows=len(replayed.rows),
