@@ -3,6 +3,7 @@ recorded and replayed, and localization measured."""
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import logging
@@ -378,3 +379,26 @@ def test_the_example_localizes_with_all_four_sensors_in_process() -> None:
     truth = sim.robot.pose
     assert p >= 0.9 - 1e-9  # certain, but for the chance the last move failed
     assert errors(Pose(x, y, heading), truth) == pytest.approx((0.0, 0.0), abs=1e-6)
+
+
+def test_a_sweep_reports_time_to_localize_per_start_cell(tmp_path: Path) -> None:
+    sweep = tmp_path / "sweep.toml"
+    config = EXAMPLES / "project.toml"
+    sweep.write_text(
+        f'config = "{config}"\n'
+        f'program = "{sys.executable} -u {EXAMPLE} {config} --sensors u0 --moves 8"\n'
+        'seeds = 1\nseconds = 60\nwall_seconds = 60\nsuccess = "localized_at < 60"\n'
+        'keep = "nothing"\n[grid]\n"scenario.start" = ["3,0,0", "3,5,90", "0,2,180"]\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["sweep", str(sweep), "-o", str(out), "--workers", "1"])
+    assert result.exit_code in (0, 1), result.output
+    with (out / "results.csv").open(newline="") as file:
+        rows = list(csv.DictReader(file))
+    assert [row["estimates"] for row in rows] == ["8", "8", "8"]
+    assert all(float(row["localized_at"]) < 60 for row in rows)
+    summary = (out / "summary.md").read_text()
+    assert "time to localize median" in summary
+    assert "localized_start_cells.png" in summary
+    assert (out / "localized_start_cells.png").stat().st_size > 5_000
