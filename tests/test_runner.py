@@ -11,6 +11,7 @@ from simmer.protocol import Decoded
 from simmer.runner import Runner
 from simmer.transport import BusClosed, CommandBus
 from simmer.world import Simulation
+from simmer.world.events import CommandEvent, Event
 
 
 @pytest.fixture
@@ -19,12 +20,14 @@ def runner() -> Runner:
 
 
 def test_serve_answers_queued_messages_in_order(runner: Runner) -> None:
+    seen: list[Event] = []
+    runner.sim.add_observer(seen.append)
     first = runner.bus.submit("w0-6", "a")
     second = runner.bus.submit("w0-6", "b")
     assert runner.serve() == 2
     assert first.result() == [math.inf]
     assert second.result()[0] != second.result()[0]  # NaN: a drive is busy
-    assert [e.client for e in runner.history] == ["a", "b"]
+    assert [e.client for e in seen if isinstance(e, CommandEvent)] == ["a", "b"]
 
 
 def test_undecodable_message_gets_nan_per_command(runner: Runner) -> None:

@@ -391,6 +391,7 @@ def run(
             help="Project: where the robot starts: a cell 'row,col' or 'row,col,heading', "
             "'random' (a start cell drawn from the seed), 'open' or 'config'.",
             show_default=False,
+            metavar="CELL",
         ),
     ] = None,
     block: Annotated[
@@ -399,6 +400,7 @@ def run(
             help="Project: the block's centre 'x,y' in inches, 'random' (inside the loading "
             "zone, drawn from the seed) or 'config'.",
             show_default=False,
+            metavar="X,Y",
         ),
     ] = None,
     target: Annotated[
@@ -406,6 +408,7 @@ def run(
         typer.Option(
             help="Project: the drop-off zone to deliver to (e.g. B2), or 'random'.",
             show_default=False,
+            metavar="ZONE",
         ),
     ] = None,
     answer: Annotated[
@@ -414,6 +417,7 @@ def run(
             help='What --program reads at its input() prompt (e.g. the target zone, "B2"); '
             "'{target}' is replaced by this run's target.",
             show_default=False,
+            metavar="TEXT",
         ),
     ] = None,
 ) -> None:

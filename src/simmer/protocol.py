@@ -305,6 +305,10 @@ class ReplyCodec(Protocol):
         """The replies to several messages as one packet (``b""``: nothing to send)."""
         ...
 
+    def describe(self) -> str:
+        """What the replies look like, for the start-up lines (``as packed 4-byte floats``)."""
+        ...
+
 
 @dataclass(frozen=True)
 class PackedCodec:
@@ -325,6 +329,10 @@ class PackedCodec:
     def encode_many(self, answered: Sequence[Replies]) -> bytes:
         """Every message's values packed, one after another."""
         return b"".join(self.encode(decoded, values) for decoded, values in answered)
+
+    def describe(self) -> str:
+        """``as packed 4-byte floats`` (or 8-byte doubles)."""
+        return f"as packed {'8-byte doubles' if self.width == 8 else '4-byte floats'}"
 
 
 def unwrap_frames(text: str, start: str = "[", end: str = "]") -> str | None:
@@ -401,6 +409,14 @@ class FramedCodec:
             return b""
         text = f"{self.start}{','.join(entries)}{self.end}"
         return text.encode(self.encoding, errors="replace")
+
+    def describe(self) -> str:
+        """``in SimMeR v1.2 framed text ([u0] -> [u0:15.45], 3 decimals)``."""
+        start, end = self.start, self.end
+        return (
+            f"in SimMeR v1.2 framed text ({start}u0{end} -> {start}u0:15.45{end}, "
+            f"{self.round_digits} decimals)"
+        )
 
     def entry(self, device_id: str, value: float) -> str:
         """One reply entry, ``id:value``."""

@@ -129,16 +129,6 @@ class _Held:
     deadline: float
 
 
-@dataclass(frozen=True)
-class Exchange:
-    """One answered message, for the HUD: when, from whom, what was asked and answered."""
-
-    time: float
-    client: str
-    message: str
-    replies: tuple[float, ...]
-
-
 class Runner:
     """Drive a simulation in real time (or faster) and serve the bus; see the module doc."""
 
@@ -148,14 +138,12 @@ class Runner:
         *,
         speed: float | None = 1.0,
         bus: CommandBus | None = None,
-        history: int = 20,
         lockstep: bool = False,
         link_delay: float | None = None,
     ) -> None:
         self.sim = sim
         self.bus = bus if bus is not None else CommandBus()
         self._paused = False
-        self.history: deque[Exchange] = deque(maxlen=history)
         self._speed: float | None = None
         self._reschedule = True
         self.speed = speed
@@ -229,13 +217,10 @@ class Runner:
             self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
             request.reasons.append(error)
             replies = [math.nan] * decoded.count
-            message = f"<{decoded.error}>"
         else:
             records: list[tuple[int, str]] = []
             replies = self.sim.command(decoded.text, records, request.client)
-            message = decoded.text
             self._report(printable(request.client), records, request.reasons)
-        self.history.append(Exchange(self.sim.time, request.client, message, tuple(replies)))
         request.future.set_result(replies)
         return replies
 

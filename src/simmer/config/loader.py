@@ -16,7 +16,7 @@ from typing import Any
 from pydantic import BaseModel
 
 from simmer.config import simmer_py
-from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
+from simmer.config.models import DEVICE_GROUPS, SimConfig
 from simmer.config.toml_errors import toml_issue, with_lines
 from simmer.config.validate import ORIGINAL_RUNS, config_from_dict
 from simmer.errors import ConfigError, ConfigIssue
@@ -35,7 +35,6 @@ __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here f
     "config_from_toml",
     "default_config",
     "describe_noise",
-    "describe_replies",
     "load_config",
     "noisy_devices",
     "placed_issues",
@@ -194,7 +193,7 @@ def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True)
         f"Robot starting {start} "
         f"with {', '.join(parts)}. "
         f"Noise: {describe_noise(config, seed)}. {s.frame_rate:g} steps/s{served}, replies "
-        f"{describe_replies(s)}." + _project(config)
+        f"{config.reply_codec().describe()}." + _project(config)
     )
 
 
@@ -241,15 +240,3 @@ def _project(config: SimConfig) -> str:
         return ""
     target = "drawn from the seed" if s.scenario.target == "random" else s.scenario.target
     return f" {Zones.from_settings(s).describe()} Target zone: {target}."
-
-
-def describe_replies(settings: Settings) -> str:
-    """What the two-port scheme and the serial port answer, for the start-up lines."""
-    if settings.protocol == "framed":
-        start, end = settings.frame_start, settings.frame_end
-        return (
-            f"in SimMeR v1.2 framed text ({start}u0{end} -> {start}u0:15.45{end}, "
-            f"{settings.round_digits} decimals)"
-        )
-    kind = "8-byte doubles" if settings.reply_bytes == 8 else "4-byte floats"
-    return f"as packed {kind}"

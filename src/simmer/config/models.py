@@ -23,6 +23,7 @@ from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.errors import ConfigIssue
 from simmer.ports import PORT_RX, PORT_TX
+from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
 
 Point = tuple[float, float]
 
@@ -261,6 +262,14 @@ class SimConfig:
     origin: str = ""
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
+
+    def reply_codec(self) -> ReplyCodec:
+        """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""
+        s = self.settings
+        if s.protocol == "packed":
+            return PackedCodec(s.reply_bytes, s.str_encoding)
+        categories = {spec.id: spec.group[:-1] for spec in self.devices}
+        return FramedCodec(categories, s.frame_start, s.frame_end, s.round_digits, s.str_encoding)
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""
