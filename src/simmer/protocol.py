@@ -30,7 +30,7 @@ import math
 import re
 import struct
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar, Protocol
 
 STOP_ID = "xx"
@@ -224,17 +224,20 @@ def _not_text(exc: UnicodeDecodeError, encoding: str) -> str:
     return f"not {encoding} text ({exc.reason} at byte {exc.start})"
 
 
-def decode_message(data: bytes, encoding: str = "utf-8") -> Decoded:
+def decode_message(
+    data: bytes, encoding: str = "utf-8", *, size: int = 0, clock: bool = False
+) -> Decoded:
     """Decode the bytes of one message (line ending already removed, or not); the limits are
-    checked before anything else is done with it."""
+    checked before anything else is done with it. ``size`` and ``clock`` go into the result
+    (:attr:`Decoded.size`, :attr:`Decoded.clock`)."""
     count = data.count(b",") + 1
     if (refused := over_limit(len(data), count)) is not None:
-        return refused
+        return replace(refused, size=size)
     try:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
-        return Decoded(None, count, _not_text(exc, encoding))
-    return Decoded(text.rstrip("\r\n"), count)
+        return Decoded(None, count, _not_text(exc, encoding), size=size, clock=clock)
+    return Decoded(text.rstrip("\r\n"), count, size=size, clock=clock)
 
 
 def pack_replies(values: Sequence[float], width: int = 4) -> bytes:
