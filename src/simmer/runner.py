@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from simmer.lockstep import FREE_TIME_READS
-from simmer.protocol import ClockMessage, parse_clock, printable
+from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
@@ -445,3 +445,36 @@ class Runner:
                 self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))
             else:
                 self.serve(min(next_step - now, wake - now, MAX_WAIT))
+
+
+class LocalLink:
+    """A client link to a simulation in this process, on the lockstep clock (no sockets):
+    messages go straight to a lockstep :class:`Runner` of ``sim`` in this thread.
+
+    ``Client(LocalLink(sim), lockstep=True)`` gives a control program written against
+    :mod:`simmer.client` the same run it gets from ``simmer run --program``: each message
+    costs the link delay, ``sleep`` and ``wait_idle`` advance the clock, all through the same
+    :class:`Runner` code. Sweeps, tests and notebooks use it to run a program without a
+    server.
+    """
+
+    last_text: str | None = None
+
+    def __init__(self, sim: Simulation, link_delay: float | None = None) -> None:
+        self.runner = Runner(sim, speed=None, lockstep=True, link_delay=link_delay)
+
+    def exchange(self, message: str) -> list[float]:
+        """Execute one message (or clock message) and let the time it costs pass."""
+        clock = message.encode("utf-8").startswith(CLOCK_PREFIX)
+        request = Request(Decoded(message, message.count(",") + 1, clock=clock), "local")
+        self.runner.handle(request)
+        self.runner.catch_up()
+        return request.future.result()
+
+    def clock(self, message: str) -> float:
+        """Send a clock message; the simulated time after it."""
+        (value,) = self.exchange(message)
+        return value
+
+    def close(self) -> None:
+        """Nothing to release."""

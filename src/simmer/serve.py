@@ -24,7 +24,7 @@ from simmer.lockstep import (
 )
 from simmer.record import RunRecorder, RunSetup
 from simmer.runner import Runner
-from simmer.transport import STREAM_PORT, Link
+from simmer.transport import STREAM_PORT, Transports
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
@@ -158,7 +158,7 @@ def serve(
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
     try:
-        link = Link(
+        transports = Transports(
             runner.bus,
             sim.config,
             host=host,
@@ -169,7 +169,7 @@ def serve(
             serial_link=serial_link,
             lockstep=lockstep,
         )
-        with link:
+        with transports:
             if record is not None:
                 clock = "lockstep" if lockstep else "realtime"
                 delay = runner.link_delay if lockstep else None
@@ -181,7 +181,7 @@ def serve(
 
                 filming = VideoRecorder(sim, video, controls=runner)
                 echo(f"recording a video into {video}")
-            for line in link.describe():
+            for line in transports.describe():
                 echo(line)
             if lockstep:
                 echo(
@@ -192,7 +192,7 @@ def serve(
                     echo(NOT_PYTHON.format(command=program))
             if program is not None:
                 started = _start_program(
-                    program, link, sim.config, runner.bus, stop, ended, timeout, echo, answer
+                    program, transports, sim.config, runner.bus, stop, ended, timeout, echo, answer
                 )
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
@@ -245,7 +245,7 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 
 def _start_program(
     command: str,
-    link: Link,
+    transports: Transports,
     config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
@@ -257,15 +257,15 @@ def _start_program(
     """Start the control program on this run's ports; a thread ends the run when it exits or
     at the wall-clock ``timeout`` (then stopping its whole process tree)."""
     ports = {
-        "port_rx": link.two_port.port_rx,
-        "port_tx": link.two_port.port_tx,
-        "stream": link.stream.port,
+        "port_rx": transports.two_port.port_rx,
+        "port_tx": transports.two_port.port_tx,
+        "stream": transports.stream.port,
     }
     settings = config.settings
     configured = {"port_rx": settings.port_rx, "port_tx": settings.port_tx}
-    env = program_environment(ports, link.host, configured=configured)
-    if link.serial is not None:
-        env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
+    env = program_environment(ports, transports.host, configured=configured)
+    if transports.serial is not None:
+        env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
     program = Program.start(command, env, answer)
     echo(f"started the program: {command}")
 

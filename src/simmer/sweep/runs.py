@@ -449,13 +449,13 @@ def resolve_policy(target: str, folder: str) -> Callable[[Any], object]:
 
 
 class _LimitedLink:
-    """A :class:`~simmer.transport.local.LocalLink` that ends the run (raising
+    """A :class:`~simmer.runner.LocalLink` that ends the run (raising
     :class:`LimitReached`) once the simulated-time limit has passed."""
 
     last_text: str | None = None
 
     def __init__(self, sim: Any, seconds: float | None) -> None:
-        from simmer.transport.local import LocalLink
+        from simmer.runner import LocalLink
 
         self.sim = sim
         self.inner = LocalLink(sim)

@@ -25,7 +25,7 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-class Link:
+class Transports:
     """The two-port server, the stream server and (optionally) the virtual serial port;
     ``lockstep``: served on the lockstep clock (no wall-clock grace anywhere)."""
 
@@ -101,7 +101,7 @@ class Link:
             if server is not None:
                 server.close()
 
-    def __enter__(self) -> Link:
+    def __enter__(self) -> Transports:
         self.start()
         return self
 
