@@ -7,6 +7,8 @@ import threading
 
 import pytest
 
+from link_support import serving
+from simmer.errors import WrongThread
 from simmer.protocol import Decoded
 from simmer.runner import Runner
 from simmer.transport import BusClosed, CommandBus
@@ -90,3 +92,12 @@ def test_clients_are_listed() -> None:
     assert Runner(Simulation.from_config(), bus=bus).clients == ["stream 1"]
     bus.disconnect("stream 1")
     assert bus.clients == []
+
+
+def test_only_the_loop_thread_may_drive_a_served_simulation() -> None:
+    sim = Simulation.from_config()
+    with serving(sim):
+        for drive in (lambda: sim.command("u0"), sim.step, sim.reset, sim.run_until_idle):
+            with pytest.raises(WrongThread, match="belongs to the thread running its loop"):
+                drive()
+    assert sim.command("u1") == [pytest.approx(3.5)]  # the loop has ended: anyone may again

@@ -412,6 +412,18 @@ class Runner:
         simulation in the program's order; in real time it steps on the wall clock and answers
         every request between two steps.
         """
+        self.sim.own(threading.get_ident())
+        try:
+            self._run(on_frame, stop_event, until)
+        finally:
+            self.sim.own(None)
+
+    def _run(
+        self,
+        on_frame: FrameCallback | None,
+        stop_event: threading.Event | None,
+        until: float | None,
+    ) -> None:
         sim = self.sim
         lockstep = self.lockstep
         next_step = next_frame = time.monotonic()
