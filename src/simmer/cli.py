@@ -458,15 +458,52 @@ def plot(
         out.print(f"wrote {path}", markup=False)
 
 
-def _load_recording(folder: Path) -> Recording:
+TrustOption = Annotated[
+    bool,
+    typer.Option(
+        "--trust",
+        help="Import the plug-ins the run was recorded with (their code runs): only for a "
+        "folder from someone you trust. Without it, a run with plug-ins is not re-simulated.",
+    ),
+]
+PluginOption = Annotated[
+    list[Path] | None,
+    typer.Option(
+        "--plugin",
+        help="Re-simulate with this plug-in file (your own copy) instead of the ones the run "
+        "names; repeat for each.",
+        show_default=False,
+    ),
+]
+MaxSecondsOption = Annotated[
+    float | None,
+    typer.Option(
+        "--max-seconds",
+        help="Re-simulate at most this many simulated seconds (default: 3600); a folder whose "
+        "events go further is refused.",
+        min=0,
+        show_default=False,
+    ),
+]
+
+
+def _load_recording(
+    folder: Path, trust: bool, plugins: list[Path] | None, max_seconds: float | None
+) -> Recording:
     """Re-simulate a run folder, saying whether it matches its recording; exit status 1 with
     one line if it cannot be replayed."""
     from simmer.errors import ReplayError
+    from simmer.record.runfolder import MAX_RUN_SECONDS
     from simmer.ui.replay_model import Recording
 
     out.print(f"re-simulating the run in {folder} ...", markup=False)
     try:
-        recording = Recording.load(folder)
+        recording = Recording.load(
+            folder,
+            trust=trust,
+            plugins=plugins or None,
+            max_seconds=MAX_RUN_SECONDS if max_seconds is None else max_seconds,
+        )
     except ReplayError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
@@ -490,12 +527,15 @@ def replay(
             "status 1 if they differ.",
         ),
     ] = False,
+    trust: TrustOption = False,
+    plugin: PluginOption = None,
+    max_seconds: MaxSecondsOption = None,
 ) -> None:
     """Replay a recorded run in a window: play, pause, speed, a timeline to drag, the commands
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
     if not)."""
-    recording = _load_recording(folder)
+    recording = _load_recording(folder, trust, plugin, max_seconds)
     if check:
         raise typer.Exit(0 if recording.check.matches else 1)
     from simmer.errors import SimmerError
@@ -536,13 +576,16 @@ def render(
             show_default=False,
         ),
     ] = None,
+    trust: TrustOption = False,
+    plugin: PluginOption = None,
+    max_seconds: MaxSecondsOption = None,
 ) -> None:
     """Cut a clip of a recorded run into a video: what the window shows (with the path driven
     so far), at 30 frames per simulated second, drawn without a display."""
     from simmer.errors import ReplayError
     from simmer.ui.clip import write_clip
 
-    recording = _load_recording(folder)
+    recording = _load_recording(folder, trust, plugin, max_seconds)
     path = output if output is not None else folder / "replay.mp4"
     try:
         frames = write_clip(recording, path, start, end)

@@ -331,6 +331,12 @@ def _kind_list(category: str) -> str:
 # ----------------------------------------------------------------------------- cross checks
 
 
+def maze_issues(settings: Settings) -> list[ConfigIssue]:
+    """What is wrong with the maze of settings validated already (its shape, its sizes), for
+    a tool that draws a recorded maze without its devices (``simmer plot``)."""
+    return _check_walls(settings) or _check_sizes(settings)
+
+
 def _check_walls(settings: Settings) -> list[ConfigIssue]:
     walls = settings.walls
     if not walls or not walls[0]:

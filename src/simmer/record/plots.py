@@ -224,7 +224,13 @@ def read_run(folder: str | Path) -> RecordedRun:
 
 def _read_trace(path: Path) -> Trace:
     """The trace's columns; a new part wherever the clock goes back (a reset)."""
+    from simmer.record.eventlog import MAX_RECORDING_BYTES
+
     try:
+        if path.stat().st_size > MAX_RECORDING_BYTES:
+            raise PlotError(
+                f"{path} is larger than a recording holds ({MAX_RECORDING_BYTES:,} bytes)"
+            )
         with path.open(newline="", encoding="utf-8") as file:
             reader = csv.reader(file)
             header = [name.strip() for name in next(reader, [])]
@@ -271,23 +277,21 @@ def _number(cell: str) -> float | None:
 
 def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
     """The run a manifest describes, with this trace (no events yet)."""
+    from simmer.record.runfolder import read_manifest
+
     if not path.is_file():
         raise PlotError(f"no {MANIFEST_FILE} in {path.parent}: the maze to draw is unknown")
     try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeError, ValueError) as exc:
+        manifest = read_manifest(path.parent)
+    except OSError as exc:
         raise PlotError(f"cannot read {path}: {exc}") from None
-    config = manifest.get(MANIFEST_CONFIG) if isinstance(manifest, dict) else None
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
+    config = manifest.get(MANIFEST_CONFIG)
     data = config.get(MANIFEST_SETTINGS) if isinstance(config, dict) else None
     if not isinstance(config, dict) or not isinstance(data, dict):
         raise PlotError(f"{path} has no {MANIFEST_CONFIG}.{MANIFEST_SETTINGS}: the maze is unknown")
-    known = {key: value for key, value in data.items() if key in Settings.model_fields}
-    try:
-        settings = Settings.model_validate(known)
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(part) for part in first["loc"])
-        raise PlotError(f"{path}: setting {where}: {first['msg']}") from None
+    settings = _settings(path, data)
     seed = manifest.get(MANIFEST_SEED)
     source = config.get(MANIFEST_SOURCE)
     devices = config.get(MANIFEST_DEVICES)
@@ -308,15 +312,48 @@ def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
     )
 
 
+def _settings(path: Path, data: dict[str, Any]) -> Settings:
+    """A manifest's settings, with the maze checked as a run's is (a 2000 x 2000 ``walls``
+    would take gigabytes to draw); PlotError naming the first problem."""
+    from simmer.config.validate import maze_issues, oversize_walls
+
+    known = {key: value for key, value in data.items() if key in Settings.model_fields}
+    issue = oversize_walls(known.get("walls"))
+    if issue is None:
+        try:
+            settings = Settings.model_validate(known)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            where = ".".join(str(part) for part in first["loc"])
+            raise PlotError(f"{path}: setting {where}: {first['msg']}") from None
+        issue = next(iter(maze_issues(settings)), None)
+        if issue is None:
+            return settings
+    raise PlotError(f"{path}: the recorded maze is not valid: {issue.render(str(path))}")
+
+
 def _read_events(path: Path, run: RecordedRun) -> None:
-    """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``."""
+    """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``;
+    PlotError for an event at a time no run of the limit reaches (:data:`MAX_RUN_SECONDS`
+    past the trace's end: a label there overflows the drawing)."""
+    from simmer.record.eventlog import MAX_RECORDING_BYTES
+    from simmer.record.runfolder import MAX_RUN_SECONDS
+
+    if path.stat().st_size > MAX_RECORDING_BYTES:
+        raise PlotError(f"{path} is larger than a recording holds ({MAX_RECORDING_BYTES:,} bytes)")
+    latest = float(np.max(run.trace.time)) + MAX_RUN_SECONDS
     part = 0
-    for event in _json_lines(path):
+    for number, event in _json_lines(path):
         kind, time = event.get(EV_TYPE), _float(event.get(EV_TIME))
         if kind == EV_RESET:
             part += 1
         elif not math.isfinite(time):
             continue
+        elif not 0 <= time <= latest:
+            raise PlotError(
+                f"{path} line {number}: time {time:g} s is outside the run (its trace ends at "
+                f"{latest - MAX_RUN_SECONDS:g} s): not a recorded event"
+            )
         elif kind == EV_COMMAND:
             replies = event.get(EV_REPLIES)
             values = tuple(_float(r) for r in replies) if isinstance(replies, list) else ()
@@ -328,17 +365,18 @@ def _read_events(path: Path, run: RecordedRun) -> None:
             run.reached.append(Mark(time, part))
 
 
-def _json_lines(path: Path) -> Iterator[dict[str, Any]]:
-    """The JSON objects of a JSON-lines file, skipping lines that are not one."""
+def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
+    """The JSON objects of a JSON-lines file with their line numbers, skipping lines that are
+    not one."""
     try:
         with path.open(encoding="utf-8", errors="replace") as file:
-            for line in file:
+            for number, line in enumerate(file, 1):
                 try:
                     value = json.loads(line)
-                except ValueError:
+                except (ValueError, RecursionError):
                     continue
                 if isinstance(value, dict):
-                    yield value
+                    yield number, value
     except OSError as exc:
         raise PlotError(f"cannot read {path}: {exc}") from None
 
@@ -377,7 +415,12 @@ def plot_run(folder: str | Path) -> list[Path]:
     write_path_plot(run, path)
     write_sensor_plot(run, sensors)
     if (run.folder / REPORT_JSON).is_file():
-        return [path, sensors, write_report_md(run.folder)]
+        try:
+            return [path, sensors, write_report_md(run.folder)]
+        except (OSError, ValueError) as exc:
+            raise PlotError(
+                f"drew {path.name} and {sensors.name}, but not report.md: {exc}"
+            ) from None
     return [path, sensors, report] if link_from_report(report, IMAGES) else [path, sensors]
 
 
