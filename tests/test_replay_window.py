@@ -453,7 +453,7 @@ def test_what_cannot_be_replayed_is_said_in_one_line(tmp_path: Path, copy: Path)
     )
     (copy / "manifest.json").write_text("{not json")
     assert fails("replay", str(copy)).startswith(f"{copy / 'manifest.json'} is not readable JSON")
-    with pytest.raises(ReplayError, match="cannot read"):
+    with pytest.raises(ReplayError, match="is not readable JSON"):
         Recording.load(copy)
 
 
