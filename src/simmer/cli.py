@@ -257,6 +257,14 @@ def run(
             show_default=False,
         ),
     ] = None,
+    record_limit: Annotated[
+        float,
+        typer.Option(
+            help="Megabytes events.jsonl and trace.csv of --record may hold together; past it "
+            "the recording stops and the run goes on.",
+            min=1,
+        ),
+    ] = 256,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -317,6 +325,7 @@ def run(
         except OSError as exc:
             err.print(f"cannot record into {record}: {exc}", style="bold red", markup=False)
             raise typer.Exit(1) from None
+        seconds, timeout = _recorded_run_limits(seconds, timeout, program)
     log_file = _log_to_file() if program is not None else None
     if log_file is not None:
         out.print(f"the simulator's log goes to {log_file}", markup=False)
@@ -338,6 +347,7 @@ def run(
             timeout=timeout,
             record=record,
             video=video,
+            record_limit=int(record_limit * 2**20),
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -346,7 +356,9 @@ def run(
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(served.outcome.report().summary(), markup=False)
-    if record is not None:
+    if served.recording_stopped is not None:
+        err.print(served.recording_stopped, style="bold red", markup=False)
+    elif record is not None:
         out.print(f"recorded in {record}; the report is {record / 'report.md'}", markup=False)
     if program is not None:
         if served.ended_by == "program":
@@ -359,6 +371,30 @@ def run(
             ended = "the run was stopped"
         out.print(f"run ended: {ended}; log: {log_file}", markup=False)
     raise typer.Exit(served.exit_status)
+
+
+def _recorded_run_limits(
+    seconds: float | None, timeout: float | None, program: str | None
+) -> tuple[float, float | None]:
+    """A recorded run's limits: ``--seconds`` (default: an hour of simulated time) and, with
+    a program, ``--timeout`` (default: an hour of wall time), so that a program that sleeps or
+    hangs forever does not record forever."""
+    from simmer.record.runfolder import MAX_RUN_SECONDS
+
+    if seconds is None:
+        seconds = MAX_RUN_SECONDS
+        out.print(
+            f"a recorded run stops at {seconds:g} s of simulated time (--seconds changes it)",
+            markup=False,
+        )
+    if program is not None and timeout is None:
+        timeout = MAX_RUN_SECONDS
+        out.print(
+            f"a recorded program is stopped after {timeout:g} s of wall time "
+            "(--timeout changes it)",
+            markup=False,
+        )
+    return seconds, timeout
 
 
 def _check_video(path: Path) -> None:

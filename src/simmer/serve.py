@@ -15,7 +15,9 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
+from simmer.proctree import adopt_orphans, descendants, stop_strays
 from simmer.record import RunRecorder, RunSetup
+from simmer.record.eventlog import MAX_RECORDING_BYTES
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Link
 from simmer.world import Simulation
@@ -88,6 +90,8 @@ class Served:
     program_status: int | None = None
     """The control program's exit status, if it ended the run."""
     program_started: bool = False
+    recording_stopped: str | None = None
+    """Why the recording stopped before the run ended (a full disk, its size limit), if it did."""
 
     @property
     def exit_status(self) -> int:
@@ -122,6 +126,7 @@ def serve(
     timeout: float | None = None,
     record: Path | None = None,
     video: Path | None = None,
+    record_limit: int = MAX_RECORDING_BYTES,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -130,7 +135,10 @@ def serve(
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
-    with a window or headless, and the file is finished however the run ends.
+    with a window or headless, and the file is finished however the run ends. A recording
+    that reaches ``record_limit`` bytes or fills the disk stops (the run goes on), and
+    :attr:`Served.recording_stopped` says so. When the run ends, every process the program
+    started is stopped, however it detached (:mod:`simmer.proctree`).
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
     ``record`` folder cannot be written (FileExistsError if it holds a run already), and
@@ -142,6 +150,7 @@ def serve(
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
+    before: set[int] = set()
     signalled: list[str] = []
     restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     recorder: RunRecorder | None = None
@@ -162,7 +171,9 @@ def serve(
                 clock = "lockstep" if lockstep else "realtime"
                 delay = runner.link_delay if lockstep else None
                 setup = RunSetup(clock, speed, delay, program, window)
-                recorder = RunRecorder(sim, record, setup, outcome)
+                recorder = RunRecorder(
+                    sim, record, setup, outcome, max_bytes=record_limit, on_stop=_say(echo)
+                )
                 echo(f"recording the run into {record}")
             if video is not None:
                 from simmer.ui.video import VideoRecorder
@@ -177,6 +188,8 @@ def serve(
                     f"and {runner.link_delay:g} s per message"
                 )
             if program is not None:
+                adopt_orphans()
+                before = descendants()
                 started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
@@ -204,6 +217,7 @@ def serve(
         runner.bus.close()
         if started is not None:
             started.stop()
+            stop_strays(before)
         if filming is not None:
             _finish_video(filming, echo)
         restore_signals()
@@ -213,7 +227,18 @@ def serve(
     served = Served(runner, outcome, ended[0], status, program_started=started is not None)
     if recorder is not None:
         recorder.close(served.ended_by, status)
+        served.recording_stopped = recorder.stopped
     return served
+
+
+def _say(echo: Callable[[str], None]) -> Callable[[str], None]:
+    """Say a recording stopped, in the log and where the run's messages go."""
+
+    def say(line: str) -> None:
+        log.error("%s; the run goes on", line)
+        echo(f"{line}; the run goes on")
+
+    return say
 
 
 def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:

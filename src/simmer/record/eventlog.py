@@ -316,7 +316,7 @@ class EventLog:
         if self.stopped is not None:
             return
         self.stopped = reason
-        with suppress(OSError):
+        with suppress(OSError, ValueError):  # ValueError: closed already
             os.ftruncate(self._file.fileno(), self._size)
         if self._on_stop is not None:
             self._on_stop(reason)

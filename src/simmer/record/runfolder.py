@@ -27,6 +27,7 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
+from contextlib import suppress
 from dataclasses import dataclass, replace
 from datetime import datetime
 from importlib.metadata import PackageNotFoundError, version
@@ -525,6 +526,9 @@ class RunRecorder:
             write_report_md(self.folder)
         except OSError as exc:  # a full disk: the events and trace say what there is
             self._stop(stop_reason(exc))
+            for name in (REPORT_JSON, REPORT_MD):  # not half a report: none
+                with suppress(OSError):
+                    (self.folder / name).unlink(missing_ok=True)
 
     def __enter__(self) -> RunRecorder:
         return self

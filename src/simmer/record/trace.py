@@ -191,7 +191,7 @@ class TraceWriter:
             return
         self.stopped = reason
         self._rows.clear()
-        with suppress(OSError):
+        with suppress(OSError, ValueError):  # ValueError: closed already
             os.ftruncate(self._file.fileno(), self._size)
         if self._on_stop is not None:
             self._on_stop(reason)

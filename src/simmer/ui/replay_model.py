@@ -481,7 +481,7 @@ def _incomplete(folder: Path, events: list[Event]) -> str | None:
     end = f"{events[-1].time:.2f} s" if events else "its start"
     return (
         f"incomplete recording: no {REPORT_JSON}, {EVENTS} ends at {end} "
-        "(the run was killed or crashed)"
+        "(the run was killed or crashed, or the disk filled)"
     )
 
 
