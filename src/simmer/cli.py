@@ -694,9 +694,16 @@ def sweep(
     except (FileExistsError, ValueError) as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
-    except KeyboardInterrupt:
-        err.print(f"stopped; finished runs are in {folder / 'results.csv'} (--resume goes on)")
-        raise typer.Exit(130) from None
+    except KeyboardInterrupt as exc:
+        import signal
+
+        signum = getattr(exc, "signum", signal.SIGINT)
+        err.print(
+            f"stopped ({signal.Signals(signum).name}); the workers and their programs are "
+            f"stopped; finished runs are in {folder / 'results.csv'} (--resume goes on)",
+            markup=False,
+        )
+        raise typer.Exit(128 + signum) from None
     out.print(
         f"{done.successes}/{done.runs} succeeded ({done.ran} run now, {done.wall_time:.1f} s); "
         f"wrote {folder / 'results.csv'} and {folder / 'summary.md'}",
