@@ -111,6 +111,7 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
         pytest.skip("mounting a small tmpfs needs Linux and root; the injected full disk stands")
     done = subprocess.run(
         ["mount", "-t", "tmpfs", "-o", "size=192k", f"simmer-{uuid.uuid4().hex[:8]}", mount],
+        check=False,
         capture_output=True,
         text=True,
     )
@@ -134,6 +135,7 @@ def test_a_run_recording_onto_a_small_disk_keeps_serving(small_disk: Path, tmp_p
     folder = small_disk / "run"
     done = subprocess.run(
         [SIMMER, "run", "--headless", "--record", folder, "--program", f"python {program}"],
+        check=False,
         capture_output=True,
         text=True,
         timeout=150,
@@ -166,6 +168,7 @@ def test_a_recorded_run_stops_at_an_hour_of_simulated_time(tmp_path: Path) -> No
             "--program",
             "python -c 'import time; time.sleep(1e9)'",
         ],
+        check=False,
         capture_output=True,
         text=True,
         timeout=150,

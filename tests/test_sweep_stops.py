@@ -163,6 +163,7 @@ def test_a_run_stops_the_children_its_program_detached(tmp_path: Path) -> None:
     )
     done = subprocess.run(
         [SIMMER, "run", "--headless", "--program", f"python {program}"],
+        check=False,
         capture_output=True,
         text=True,
         timeout=90,
