@@ -6,9 +6,10 @@ import contextlib
 import errno
 import logging
 import os
+from collections.abc import Iterator
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.console import Console
@@ -104,21 +105,44 @@ def check(
 ) -> None:
     """Check a configuration and call each device once: print OK and a summary, or every
     problem found (exit status 1)."""
-    try:
-        loaded = load_config(config)
-    except ConfigError as exc:
-        _report_config_error(exc)
-        raise typer.Exit(1) from None
-    _report_config_warnings(loaded)
-    if loaded.origin:
-        out.print(loaded.origin, markup=False)
-    from simmer.config.probe import probe_devices
+    with _exit_refused():
+        try:
+            loaded = load_config(config)
+        except ConfigError as exc:
+            _report_config_error(exc)
+            raise typer.Exit(1) from None
+        _report_config_warnings(loaded)
+        if loaded.origin:
+            out.print(loaded.origin, markup=False)
+        from simmer.config.probe import probe_devices
 
-    if issues := probe_devices(loaded):
+        issues = probe_devices(loaded)
+    if issues:
         _report_config_error(ConfigError(config, issues))
         raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
+
+
+class ExitCalled(SystemExit):
+    """``os._exit`` called by a plug-in or a device while ``simmer check`` runs it."""
+
+
+@contextlib.contextmanager
+def _exit_refused() -> Iterator[None]:
+    """Within ``with``: ``os._exit(n)`` raises :class:`ExitCalled` (a ``SystemExit``, which
+    check reports as a plug-in's or device's problem) instead of ending the process with no
+    word: the code ``check`` imports and calls is the user's."""
+    real = os._exit
+
+    def refused(status: int) -> NoReturn:
+        raise ExitCalled(f"os._exit({status}) was called")
+
+    os._exit = refused
+    try:
+        yield
+    finally:
+        os._exit = real
 
 
 @app.command()
