@@ -167,7 +167,9 @@ def _describe_plugin_error(entry: str, exc: Exception | SystemExit) -> str:
             break
     what = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
     if isinstance(exc, SystemExit):
-        what += "; a plug-in may not end the program: remove its sys.exit(), exit() or os._exit() call"
+        what += (
+            "; a plug-in may not end the program: remove its sys.exit(), exit() or os._exit() call"
+        )
     return f"importing {entry} failed{where}: {what}"
 
 

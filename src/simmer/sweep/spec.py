@@ -356,7 +356,7 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     configs = data.get("config")
     if isinstance(configs, str):
         configs = [configs]
-    if not configs or not all(isinstance(c, str) for c in configs):
+    if not isinstance(configs, list) or not configs or not all(isinstance(c, str) for c in configs):
         raise SweepError("config: a configuration file (.toml or config.py), or a list of them")
     paths = tuple((folder / c).resolve() for c in configs)
     for config in paths:
@@ -382,12 +382,13 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     grid = _grid(data.get("grid", {}))
     count, sample = _sample(data.get("sample", {}), {key for key, _ in grid})
     seeds = _seeds(data.get("seeds", 1))
-    runs = run_count(len(paths), [len(values) for _, values in grid], count, len(seeds))
+    seed_count = seeds.stop if isinstance(seeds, range) else len(seeds)  # len() stops at 2**63
+    runs = run_count(len(paths), [len(values) for _, values in grid], count, seed_count)
     if runs > MAX_RUNS:
         combinations = math.prod(len(values) for _, values in grid)
         raise SweepError(
             f"{runs:,} runs ({len(paths)} configuration(s) x {combinations:,} "
-            f"grid combination(s) x {max(count, 1):,} draw(s) x {len(seeds):,} seed(s)); at most "
+            f"grid combination(s) x {max(count, 1):,} draw(s) x {seed_count:,} seed(s)); at most "
             f"{MAX_RUNS:,} (MAX_RUNS: {LIMITS}): split the sweep into several files"
         )
     if "sample_seed" in data and not sample:
