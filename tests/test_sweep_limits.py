@@ -37,6 +37,7 @@ def refuse(tmp_path: Path, text: str, *words: str) -> float:
     assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(str(sweep)), lines[0]  # the file first
     for word in words:
         assert word in lines[0], lines[0]
     assert not (tmp_path / "sweep-results").exists()  # nothing ran

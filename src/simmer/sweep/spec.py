@@ -302,8 +302,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     path = Path(path)
     try:
         text = _read_text(path)
-        _check_key_lengths(text)
-        data = tomllib.loads(text)
+        data = tomllib.loads(_short_keys(text, path))
     except (OSError, UnicodeDecodeError) as exc:
         raise SweepError(f"cannot read {path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
@@ -316,18 +315,20 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise SweepError(f"{path}: {exc}") from None
 
 
-def _check_key_lengths(text: str) -> None:
-    """Refuse a line whose key has far more names than :data:`MAX_KEY_PARTS` before it is
-    parsed: Python's TOML reader takes time growing with the square of a dotted key's length
-    (6 s for 20,000 names). The exact count is checked on the parsed keys."""
+def _short_keys(text: str, path: Path) -> str:
+    """``text``, unless a line's key has far more names than :data:`MAX_KEY_PARTS`: refused
+    before it is parsed, since Python's TOML reader takes time growing with the square of a
+    dotted key's length (6 s for 20,000 names). The exact count is checked on the parsed
+    keys."""
     for line in text.splitlines():
         key = line.split("=", 1)[0] if "=" in line else line
         if key.count(".") > 4 * MAX_KEY_PARTS:
-            shown = ".".join(key.strip().strip("[").split(".")[:4])
+            shown = ".".join(key.strip().strip("[\"'").split(".")[:4])
             raise SweepError(
-                f"{shown}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
+                f"{path}: {shown}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
                 f"{LIMITS}); configuration keys have at most 5"
             )
+    return text
 
 
 def _read_text(path: Path) -> str:
