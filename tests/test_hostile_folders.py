@@ -186,13 +186,23 @@ HOSTILE: dict[str, tuple[Callable[[Path], None], tuple[str, ...], tuple[str, ...
         ("manifest.json", "larger than"),
     ),
     "seed text": (_manifest(_set("seed", value="x")), ("replay",), ("seed 'x'",)),
-    "walls 2000": (_manifest(_walls(2000)), ("replay", "plot"), ("walls", "rows")),
+    "walls 2000": (
+        _manifest(_walls(2000)),
+        ("replay", "plot"),
+        ("manifest.json: the recorded", "walls: has 2,000 rows"),
+    ),
     "settings a list": (_manifest(_set("config", "settings", value=[])), ("replay", "plot"), ()),
     "corrupt report": (_report('{"outcome": '), ("plot",), ("report.json", "JSON")),
     "report of text": (_report('{"outcome": "x"}'), ("plot",), ("report.json",)),
     "step 10**12": (_events({**COMMAND, "time": 1.0, "step": 10**12}), ("replay",), ("limit",)),
     "time 1e10": (_events({**COMMAND, "time": 1e10, "step": 5}), ("plot",), ("time 1e+10",)),
     "event a list": (_events([1]), ("replay",), ("events.jsonl line",)),  # type: ignore[arg-type]
+    "event type a list": (_events({**COMMAND, "type": [1]}), ("replay",), ("unknown event type",)),
+    "devices a number": (
+        _manifest(_set("config", "devices", value=5)),
+        ("replay",),
+        ("manifest.json: not a run's manifest",),
+    ),
     "trace huge step": (
         lambda f: (f / "report.json").unlink() or _append(f / "trace.csv", "99999999999"),
         ("replay",),

@@ -350,6 +350,10 @@ def run(
             err.print(f"cannot record into {record}: {exc}", style="bold red", markup=False)
             raise typer.Exit(1) from None
         seconds, timeout = _recorded_run_limits(seconds, timeout, program)
+    if program is not None:  # the program's detached children stay in sight (simmer.proctree)
+        from simmer.proctree import adopt_orphans
+
+        adopt_orphans()
     log_file = _log_to_file() if program is not None else None
     if log_file is not None:
         out.print(f"the simulator's log goes to {log_file}", markup=False)

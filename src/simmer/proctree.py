@@ -3,10 +3,13 @@
 A program is started in a session of its own (:mod:`simmer.lockstep`), and stopping the run
 signals that session's process group. A child that starts a session of its own (``setsid``,
 a daemon) leaves the group, and when its parent exits it is handed to the nearest *subreaper*
-(else to init), where the simulator loses sight of it. So on Linux the process that starts a
-program becomes a subreaper (:func:`adopt_orphans`): every process the program starts stays
-its descendant however it detaches, and :func:`stop_strays` ends those still running when the
-run is over, by walking ``/proc``.
+(else to init), where the simulator loses sight of it. So on Linux ``simmer run`` and each sweep
+worker become subreapers (:func:`adopt_orphans`): every process a program starts stays their
+descendant however it detaches, and :func:`stop_strays` ends those still running when the run
+is over, by walking ``/proc``, and reaps what was handed to them. A process that embeds
+:func:`simmer.serve.serve` (a test run, a notebook) is not made one, since it would have to
+reap every orphan of its other children too; there a detached child whose parent has exited is
+out of sight.
 
 What escapes: on other systems (macOS, Windows) there is no subreaper and no ``/proc``, so only
 the process group is stopped; a process started through another service (``systemd-run``, ``at``,
@@ -24,22 +27,29 @@ from pathlib import Path
 
 PR_SET_CHILD_SUBREAPER = 36
 """``prctl`` option (Linux 3.4 and later)."""
+_adopting: list[bool] = []
+"""Holds True once this process is a subreaper (then it reaps the orphans handed to it)."""
 
 
 def adopt_orphans() -> bool:
     """Make this process the subreaper of its descendants (Linux): one whose parent exits is
-    handed to it, not to init. Whether that worked."""
+    handed to it, not to init. Whether that worked. Only for a process that starts programs
+    and nothing else it waits for (``simmer run``, a sweep worker): see the module doc."""
     if not sys.platform.startswith("linux"):
         return False
     try:
         libc = ctypes.CDLL(None, use_errno=True)
-        return bool(libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0)
+        adopted = bool(libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0)
     except (OSError, AttributeError):
         return False
+    if adopted and not _adopting:
+        _adopting.append(True)
+    return adopted
 
 
-def _parents() -> dict[int, int]:
-    """Every process's parent, from ``/proc`` (empty where there is none)."""
+def _parents(zombies: bool = False) -> dict[int, int]:
+    """Every running process's parent (or every zombie's), from ``/proc`` (empty where there
+    is none)."""
     parents = {}
     with suppress(OSError):
         for entry in os.scandir("/proc"):
@@ -50,7 +60,7 @@ def _parents() -> dict[int, int]:
             except OSError:  # it exited meanwhile
                 continue
             fields = stat[stat.rfind(")") + 2 :].split()  # the name may hold spaces and ")"
-            if fields and fields[0] != "Z":  # a zombie has exited: only reaping is left
+            if fields and (fields[0] == "Z") == zombies:  # Z: exited, to be reaped
                 parents[int(entry.name)] = int(fields[1])
     return parents
 
@@ -73,7 +83,8 @@ def descendants(pid: int | None = None) -> set[int]:
 
 def stop_strays(before: set[int]) -> set[int]:
     """SIGKILL every descendant of this process that is not in ``before`` (those running
-    before the program started), and reap those that are its children; the ones stopped."""
+    before the program started), and reap those that are its children (and, in a subreaper,
+    the orphans handed to it that exited by themselves); the ones stopped."""
     strays = descendants() - before
     for pid in strays:
         with suppress(ProcessLookupError, PermissionError):
@@ -81,4 +92,10 @@ def stop_strays(before: set[int]) -> set[int]:
     for pid in strays:  # a child handed to this subreaper: wait, or it stays a zombie
         with suppress(ChildProcessError, OSError):
             os.waitpid(pid, 0)
+    if _adopting:
+        me = os.getpid()
+        for pid, parent in _parents(zombies=True).items():
+            if parent == me and pid not in before:
+                with suppress(ChildProcessError, OSError):
+                    os.waitpid(pid, os.WNOHANG)
     return strays

@@ -15,7 +15,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
-from simmer.proctree import adopt_orphans, descendants, stop_strays
+from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder, RunSetup
 from simmer.record.eventlog import MAX_RECORDING_BYTES
 from simmer.runner import Runner
@@ -188,7 +188,6 @@ def serve(
                     f"and {runner.link_delay:g} s per message"
                 )
             if program is not None:
-                adopt_orphans()
                 before = descendants()
                 started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))

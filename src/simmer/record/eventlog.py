@@ -198,7 +198,8 @@ _READERS = {
 
 def event_from_dict(data: dict[str, Any]) -> Event:
     """The event of one parsed line (ValueError if ``data`` is not one)."""
-    cls = EVENT_TYPES.get(data.get("type", ""))
+    kind = data.get("type", "")
+    cls = EVENT_TYPES.get(kind) if isinstance(kind, str) else None
     if cls is None:
         raise ValueError(f"unknown event type {data.get('type')!r}")
     readers = _READERS[cls]

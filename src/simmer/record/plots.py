@@ -329,7 +329,7 @@ def _settings(path: Path, data: dict[str, Any]) -> Settings:
         issue = next(iter(maze_issues(settings)), None)
         if issue is None:
             return settings
-    raise PlotError(f"{path}: the recorded maze is not valid: {issue.render(str(path))}")
+    raise PlotError(f"{path}: the recorded maze is not valid: {issue.key}: {issue.message}")
 
 
 def _read_events(path: Path, run: RecordedRun) -> None:

@@ -313,13 +313,16 @@ def load_run(
     their place: :func:`config_from_manifest`). ValueError naming the file if its events go
     beyond ``max_seconds`` of simulated time (a replay would step that far)."""
     data = read_manifest(folder)
+    where = Path(folder) / MANIFEST
     try:
         config = config_from_manifest(data["config"], trust=trust, plugins=plugins)
     except UntrustedRun as exc:
-        raise UntrustedRun(exc.plugins, str(Path(folder) / MANIFEST)) from None
+        raise UntrustedRun(exc.plugins, str(where)) from None
+    except (TypeError, ValueError, AttributeError) as exc:  # a ConfigError is a SimmerError
+        raise ValueError(f"{where}: not a run's manifest: {exc}") from None
     seed = data["seed"]
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**128:
-        raise ValueError(f"{Path(folder) / MANIFEST}: seed {seed!r} is not a noise seed")
+        raise ValueError(f"{where}: seed {seed!r} is not a noise seed")
     path = Path(folder) / EVENTS
     max_steps = int(max_seconds * config.settings.frame_rate)
     return LoadedRun(config, seed, read_events(path, max_steps=max_steps))

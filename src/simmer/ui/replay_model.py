@@ -358,11 +358,15 @@ class Recording:
             raise
         except ConfigError as exc:
             problem = exc.issues[0].render(exc.source) if exc.issues else str(exc)
-            raise ReplayError(f"the recorded configuration no longer loads: {problem}") from None
+            raise ReplayError(
+                f"{folder / MANIFEST}: the recorded configuration no longer loads: {problem}"
+            ) from None
         except KeyError as exc:
             raise ReplayError(f"{folder / MANIFEST} has no {exc}: not a run's manifest") from None
-        except (OSError, ValueError, TypeError, AttributeError) as exc:
+        except OSError as exc:
             raise ReplayError(f"cannot read the run in {folder}: {exc}") from None
+        except ValueError as exc:  # each names its file
+            raise ReplayError(str(exc)) from None
         recorded = _read_recorded_trace(folder)
         incomplete = _incomplete(folder, events)
         until = _replay_until(events, recorded) if incomplete else None
