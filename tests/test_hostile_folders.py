@@ -19,6 +19,7 @@ from simmer import Simulation
 from simmer.cli import app
 from simmer.config import load_config
 from simmer.record import RunRecorder
+from simmer.record.plots import read_run
 from simmer.record.runfolder import MAX_RUN_SECONDS
 from simmer.ui.replay_model import Recording
 
@@ -250,3 +251,24 @@ def test_a_killed_recording_claims_no_rows_its_trace_lacks(copy: Path) -> None:
     assert check.matches
     assert check.rows == kept - 1  # the header is not a row
     assert f"({kept - 1} trace rows" in check.headline()
+
+
+def test_a_trace_row_with_an_absurd_pose_is_left_out_of_the_plot(copy: Path) -> None:
+    """An edited x of 1e300 printed a path length of 300 digits across the plot's title."""
+    _spoil_cell(copy / "trace.csv", 20, "x", "1e300")
+    _spoil_cell(copy / "trace.csv", 30, "time", "-1e12")
+    rows = len((copy / "trace.csv").read_text().splitlines()) - 1
+    trace = read_run(copy).trace
+    assert len(trace.time) == rows - 2
+    assert trace.length() < 1000
+    result, _ = invoke("plot", str(copy))
+    assert result.exit_code == 0, result.output
+
+
+def _spoil_cell(path: Path, line: int, column: str, value: str) -> None:
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[line].split(",")
+    cells[header.index(column)] = value
+    lines[line] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")

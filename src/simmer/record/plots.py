@@ -7,8 +7,9 @@ What is read from a run folder (the names are the constants below):
   seconds), ``x``, ``y`` (inches) and ``heading`` (degrees) are required; ``step`` and
   ``collisions`` are known and not plotted; every other column whose cells are numbers (or blank
   before a sensor's first reading) is a sensor, plotted under its header (its id, e.g. ``u0``).
-  Rows that do not parse (the half-written last line of a killed run) are skipped. A reset puts
-  the simulated clock back to 0: where ``time`` goes backwards a new part of the run begins.
+  Rows that do not parse (the half-written last line of a killed run), or whose pose is beyond
+  :data:`MAX_POSE_VALUE`, are skipped. A reset puts the simulated clock back to 0: where
+  ``time`` goes backwards a new part of the run begins.
 - ``events.jsonl`` (optional): one JSON object per line with ``type``, ``time`` and more.
   ``command`` events (``message``, ``replies``: numbers, or the strings "nan", "inf", "-inf")
   are numbered from 1 along the path; ``collision`` events are marked at their ``pose``
@@ -92,6 +93,10 @@ MAX_PATH_LABELS = 30
 """About as many command labels at most along the path (more are spaced further apart)."""
 MAX_TIME_LABELS = 40
 """Command labels at most across the sensor plot's width."""
+MAX_POSE_VALUE = 1e9
+"""A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
+is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
+300 digits across the title."""
 
 
 class PlotError(SimmerError):
@@ -250,7 +255,7 @@ def _read_trace(path: Path) -> Trace:
             pose = [float(row[i]) for i in required]
         except ValueError:
             continue
-        if all(math.isfinite(v) for v in pose):
+        if all(abs(v) <= MAX_POSE_VALUE for v in pose):  # False for NaN too
             values.append((pose, row))
     if not values:
         raise PlotError(f"{path} has no rows of data: the run recorded nothing")
