@@ -10,7 +10,15 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-SUITES = ["bench_core", "bench_link", "bench_window", "bench_sweep"]
+SUITES = [
+    "bench_cli",
+    "bench_core",
+    "bench_link",
+    "bench_lockstep",
+    "bench_soak",
+    "bench_window",
+    "bench_sweep",
+]
 
 
 def main() -> None:

@@ -1,7 +1,10 @@
 """Dead reckoning to the block (MIE444 Lab 1): drive the lab's fixed sequence and print the four
 ultrasonic readings after each move.
 
-Start the simulator first (``simmer run``), then run ``python examples/dead_reckoning.py``.
+Start the simulator first (``simmer run``), then, in a second terminal with SimMeR's
+environment active (the README's Quick start says how), run
+``python dead_reckoning.py`` in the folder ``simmer new`` made (in SimMeR's own folder:
+``python examples/dead_reckoning.py``).
 With perfect drives the rover ends facing the block; switch noise on in the configuration and
 watch it miss.
 """

@@ -1,8 +1,11 @@
 """Lab Task 1: advance in small steps and stop as soon as any ultrasonic sensor reads under 2 in.
 
-Start the simulator first (``simmer run``), then run ``python examples/obstacle_avoidance.py``.
-Try it with the noisy lab rover (``simmer run examples/lab1_rover.toml``): small steps and a
-look after each one keep it off the walls even when the drives drift.
+Start the simulator first (``simmer run``), then, in a second terminal with SimMeR's
+environment active (the README's Quick start says how), run
+``python obstacle_avoidance.py`` in the folder ``simmer new`` made (in SimMeR's own folder:
+``python examples/obstacle_avoidance.py``).
+Try it with the lab rover's noise lines uncommented (``simmer run my_rover.toml``): small
+steps and a look after each one keep it off the walls even when the drives drift.
 """
 
 from __future__ import annotations

@@ -158,10 +158,11 @@ def test_toml_nan_and_inf_literals_are_refused(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as caught:
         config_from_toml(text, "nan.toml", tmp_path)
     rendered = caught.value.render().splitlines()
-    assert rendered == [
-        "nan.toml: robot_start_rotation: must be a finite number, not -inf",
-        "nan.toml: ppi: must be a finite number, not inf",
-        "nan.toml: drives.w0.velocity[1]: must be a finite number, not nan",
+    velocity = text.splitlines().index("velocity = [0, nan]") + 1
+    assert rendered == [  # each with its line, in the file's order
+        "nan.toml:1: ppi: must be a finite number, not inf",
+        "nan.toml:2: robot_start_rotation: must be a finite number, not -inf",
+        f"nan.toml:{velocity}: drives.w0.velocity[1]: must be a finite number, not nan",
     ]
 
 
@@ -349,7 +350,7 @@ def test_a_plugin_calling_sys_exit_is_reported_not_obeyed(tmp_path: Path) -> Non
     status, output = check(path)
     assert status == 1
     assert (
-        f"{path}: plugins[0]: importing quitter.py failed at line 3: SystemExit: 3; a plug-in "
+        f"{path}:1: plugins[0]: importing quitter.py failed at line 3: SystemExit: 3; a plug-in "
         "may not end the program: remove its sys.exit(), exit() or os._exit() call"
     ) in output.replace("\n  ", " ")
 

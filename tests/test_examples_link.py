@@ -81,7 +81,7 @@ def test_cli_run_headless_serves_until_the_time_limit() -> None:
     assert result.exit_code == 0, result.output
     assert "persistent TCP" in result.output
     assert "replies as packed 4-byte floats" in result.output
-    assert "noise seed 7" in result.output
+    assert "Noise: none (every error and bias is 0)" in result.output  # the default is noise-free
     framed = CliRunner().invoke(
         app,
         ["run", "--headless", "--speed", "max", "--seconds", "0.1", "--port", "0",

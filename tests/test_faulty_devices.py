@@ -274,14 +274,14 @@ def test_check_calls_each_device_and_names_the_users_line(tmp_path: Path) -> Non
     shapes_line = lines.index("        return list(self.rays)") + 1
     assert f"3 problems in {path}:" in text
     assert (
-        f"{path}: sensors.s0: update() raised AttributeError: 'Sloppy' object has no attribute "
+        f"{path}:3: sensors.s0: update() raised AttributeError: 'Sloppy' object has no attribute "
         f"'smooth_reading' (devices/sloppy.py line {update_line}); a name used on that line does "
         "not exist"
     ) in text
-    for device_id in ("s1", "s2"):
+    for device_id, line in (("s1", 6), ("s2", 9)):  # each with its table's line
         assert (
-            f"{path}: sensors.{device_id}: shapes() raised AttributeError: 'Scribble' object has "
-            f"no attribute 'rays' (devices/sloppy.py line {shapes_line})"
+            f"{path}:{line}: sensors.{device_id}: shapes() raised AttributeError: 'Scribble' "
+            f"object has no attribute 'rays' (devices/sloppy.py line {shapes_line})"
         ) in text
 
 

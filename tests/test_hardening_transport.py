@@ -36,7 +36,7 @@ from simmer.protocol import (
     PackedCodec,
     frame_replies,
 )
-from simmer.runner import Runner
+from simmer.runner import LOG_LINES_PER_SECOND, Runner
 from simmer.transport import CommandBus, SerialServer, StreamServer
 from simmer.transport.tcp import MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
 from simmer.world import Simulation
@@ -73,9 +73,10 @@ def closed_by_server(sock: socket.socket) -> bool:
     return True
 
 
-def quick_sim(timeout: float = 300.0) -> Simulation:
+def quick_sim(timeout: float = 300.0, idle_timeout: float = 3600.0) -> Simulation:
     data = default_data()
     data["timeout"] = timeout
+    data["idle_timeout"] = idle_timeout
     return make_sim(data)
 
 
@@ -241,46 +242,91 @@ def test_a_frame_never_says_more_values_than_its_count_can() -> None:
 # --------------------------------------------------------------------------- 3. two-port
 
 
-def test_an_idle_reply_connection_does_not_take_the_next_clients_reply() -> None:
+def test_a_reply_connection_with_nothing_to_collect_is_closed_at_once() -> None:
+    # As the originals did (BEHAVIOUR §6.4): an empty transmit buffer closes the connection
+    # with nothing sent. It then cannot take the next client's reply either.
     with serving() as (_, link):
-        idle = socket.create_connection(("127.0.0.1", link.two_port.port_tx))
-        try:
-            wait_for(lambda: len(link.two_port.waiting) == 1, "the idle connection")
-            assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
-            assert two_port_send(link, b"u0,u1")[1] == pytest.approx(3.5)
-        finally:
-            idle.close()
+        with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as idle:
+            assert idle.recv(64) == b""
+        assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
+        assert two_port_send(link, b"u0,u1")[1] == pytest.approx(3.5)
 
 
-def test_unclaimed_replies_expire_and_idle_reply_connections_close(
+def test_a_persistent_connection_idle_between_messages_is_closed_after_idle_timeout(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     caplog.set_level(logging.INFO, logger="simmer.transport")
+    with serving(quick_sim(idle_timeout=0.05)) as (_, link), stream(link.stream.port) as sock:
+        for _ in range(3):  # a reply and a new message reset the clock each time
+            sock.sendall(b"u1\n")
+            assert read_frame(sock) == [pytest.approx(3.5)]
+        assert closed_by_server(sock)
+        with connect(port=link.stream.port) as robot:  # the server goes on serving
+            assert robot.read("u1") == pytest.approx(3.5)
+    assert "0.05 s between messages (idle_timeout)" in caplog.text
+
+
+def test_a_client_flooding_bad_commands_gets_ten_log_lines_a_second_then_a_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.WARNING, logger="simmer.runner")
+    with serving(speed=None) as (_, link), stream(link.stream.port) as sock:
+        started = time.monotonic()
+        for _ in range(400):
+            sock.sendall(b"zz\n")
+            assert math.isnan(read_frame(sock)[0])
+        seconds = time.monotonic() - started
+        wait_for(lambda: "more log lines in one second, not written" in caplog.text, "a count")
+    written = [r for r in caplog.records if "no device 'zz'" in r.getMessage()]
+    held = sum(
+        int(m[1])
+        for r in caplog.records
+        if (m := re.search(r"(\d+) more log lines in one second", r.getMessage()))
+    )
+    assert len(written) <= LOG_LINES_PER_SECOND * (math.ceil(seconds) + 1)
+    assert len(written) + held == 400
+
+
+def test_unclaimed_replies_expire(caplog: pytest.LogCaptureFixture) -> None:
+    caplog.set_level(logging.INFO, logger="simmer.transport")
     with serving(quick_sim(timeout=1.0)) as (_, link):
-        idle = socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10)
-        wait_for(lambda: len(link.two_port.waiting) == 1, "the idle connection")
         with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as killed:
             killed.sendall(b"u1")  # a client that sent and never came for its reply
-        wait_for(lambda: len(link.two_port.unclaimed) == 1, "the message")
-        wait_for(lambda: not link.two_port.unclaimed, "the reply to expire")
-        assert closed_by_server(idle)
-        idle.close()
+        wait_for(lambda: len(link.two_port.pending) == 1, "the message")
+        wait_for(lambda: not link.two_port.pending, "the reply to expire")
         u0 = two_port_send(link, b"u0")
         assert u0 != [pytest.approx(3.5)]  # its own reply, not the expired one
     assert "dropped 1 reply nobody collected" in caplog.text
 
 
-def test_replies_nobody_collects_are_bounded(caplog: pytest.LogCaptureFixture) -> None:
-    caplog.set_level(logging.WARNING, logger="simmer.transport")
+def test_packed_replies_nobody_collects_keep_only_the_first_as_v1_1_did(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    # SimMeR v1.0/v1.1's set_buffer_tx fills the transmit buffer only while it is empty.
+    caplog.set_level(logging.INFO, logger="simmer.transport")
     with serving() as (_, link):
+        for message in (b"u1", b"u0", b"u3"):
+            with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
+                out.sendall(message)
+        wait_for(lambda: caplog.text.count("is dropped: an earlier reply") == 2, "the drops")
+        assert [p.decoded.text for p in link.two_port.pending] == ["u1"]
+        with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
+            assert back.recv(64) == struct.pack("<f", 3.5)
+            assert back.recv(64) == b""
+
+
+def test_framed_replies_nobody_collects_are_bounded(caplog: pytest.LogCaptureFixture) -> None:
+    caplog.set_level(logging.WARNING, logger="simmer.transport")
+    framed = make_sim(default_data() | {"protocol": "framed", "str_encoding": "ascii"})
+    with serving(framed) as (_, link):
         for _ in range(MAX_UNCLAIMED + 44):
             with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
-                out.sendall(b"u0")
+                out.sendall(b"[u0]")
         with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
-            out.sendall(b"u3")
-        unclaimed = link.two_port.unclaimed
-        wait_for(lambda: bool(unclaimed) and unclaimed[-1].decoded.text == "u3", "the last message")
-        assert len(unclaimed) == MAX_UNCLAIMED
+            out.sendall(b"[u3]")
+        pending = link.two_port.pending
+        wait_for(lambda: bool(pending) and pending[-1].decoded.text == "u3", "the last message")
+        assert len(pending) == MAX_UNCLAIMED
         wait_for(lambda: dropped(caplog) == 45, "the log lines")  # one line per sweep at most
 
 

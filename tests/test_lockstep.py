@@ -8,12 +8,12 @@ import math
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from simmer import Simulation
 from simmer.client import Client
+from simmer.lockstep import runs_python
 from simmer.serve import Served, serve
 from simmer.transport.local import LocalLink
 from simmer.world.events import CommandEvent, Event, StepEvent
@@ -90,15 +90,6 @@ def local_run() -> str:
     return fingerprint.hexdigest()
 
 
-@pytest.fixture
-def busy_cpu() -> Any:
-    """Another process keeping a CPU busy while the runs go on."""
-    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
-    yield
-    hog.kill()
-    hog.wait()
-
-
 def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> None:
     runs = {
         transport: [served_run(transport) for _ in range(3)]
@@ -168,3 +159,36 @@ def test_the_cli_says_how_a_program_run_ended(tmp_path: Path) -> None:
         capture_output=True, text=True, timeout=60, check=False,
     )  # fmt: skip
     assert timed.returncode == 124, timed.stdout + timed.stderr
+
+
+@pytest.mark.parametrize(
+    ("command", "python"),
+    [
+        ("python my_robot.py", True),
+        (f"{sys.executable} -u my_robot.py", True),
+        ("py -3 my_robot.py", True),
+        ("./my_robot.py", True),
+        ("/bin/sh -c 'exit 0'", False),
+        ("./robot_controller", False),
+    ],
+)
+def test_python_programs_are_recognised(command: str, python: bool) -> None:
+    assert runs_python(command) is python
+
+
+def test_a_program_that_is_not_python_is_told_so() -> None:
+    said: list[str] = []
+    served = serve(
+        Simulation.from_config(),
+        window=False,
+        speed=None,
+        port_rx=0,
+        port_tx=0,
+        stream_port=0,
+        echo=said.append,
+        program="/bin/sh -c 'exit 0'",
+        lockstep=True,
+        timeout=60,
+    )
+    assert served.exit_status == 0
+    assert any("does not look like a Python program" in line for line in said), said

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import struct
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +20,7 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 import pytest
 from typer.testing import CliRunner
 
+from link_support import serving, two_port_raw
 from simmer import Simulation
 from simmer.cli import app
 from simmer.config import load_config
@@ -304,6 +306,37 @@ NATIVE = [
     ("motor among the sensors", set_in("sensors", "m2", value={"type": "motor"}),
      "sensors.m2.type", "belongs in [motors.m2]"),
 ]  # fmt: skip
+
+
+@pytest.mark.parametrize(("release", "expected"), [("1.0", None), ("1.2", b"[0.:Not Found,")])
+def test_a_device_id_the_original_ran_warns_and_is_unreachable_as_there(
+    tmp_path: Path, release: str, expected: bytes | None
+) -> None:
+    v12 = "\nframe_start = '['\nframe_end = ']'\nround_digits = 3\nstr_encoding = 'ascii'"
+    path = write_quirk(
+        tmp_path,
+        (SENSORS_END, "    '90.0 deg': Ultrasonic(u3_info)\n}"),
+        (
+            "block_position = [66, 5]",
+            "block_position = [66, 5]" + (v12 if release == "1.2" else ""),
+        ),
+    )
+    config = load_config(path)
+    (warning,) = config.warnings
+    assert (warning.key, warning.line) == ("sensors.90.0 deg", line_of(path, "'90.0 deg'"))
+    assert "no command can reach it" in warning.message
+    with serving(Simulation(config, seed=3)) as (_, link):
+        reply = two_port_raw(link, b"[0.0 deg][u0]" if expected else b"90.0 deg,u0")
+    if expected is None:  # v1.0: 8-byte doubles, NaN for a device not found
+        first, second = struct.unpack("<2d", reply)
+        assert math.isnan(first)
+        assert math.isfinite(second)
+    else:
+        assert reply.startswith(expected)
+    data = default_data()
+    data["sensors"]["90.0 deg"] = data["sensors"].pop("u0")
+    with pytest.raises(ConfigError, match="must be exactly two ASCII characters"):
+        make_config(data)  # the native form stays strict
 
 
 @pytest.mark.parametrize(

@@ -134,15 +134,21 @@ def test_path_length_of_a_twelve_inch_move_is_twelve() -> None:
     assert outcome.report().path_length == pytest.approx(15.0)
 
 
-def test_commands_and_nan_replies_are_counted() -> None:
+def test_commands_and_busy_and_nan_replies_are_counted_apart() -> None:
     sim = make_sim()
     outcome = Outcome.attach(sim)
     assert math.isnan(sim.command("u0,zz")[1])  # no device zz
     assert sim.command("w0-3") == [math.inf]
     assert math.isnan(sim.command("w0-3")[0])  # the drive is busy
     assert math.isnan(sim.command("w0-0")[0])  # "is it idle?": not yet
+    assert sim.command("w0-abc,r0-90,u0")[:2] != [math.inf] * 2  # malformed; busy
     report = outcome.report()
-    assert (report.messages, report.commands, report.nan_replies) == (4, 5, 3)
+    assert (report.messages, report.commands) == (5, 8)
+    assert (report.busy_replies, report.nan_replies) == (3, 2)
+    assert "3 busy (a drive still moving), 2 NaN replies" in report.summary()
+    sim.run_until_idle()
+    assert math.isnan(sim.command("w0-abc")[0])  # malformed, nothing moving: NaN
+    assert (outcome.report().busy_replies, outcome.report().nan_replies) == (3, 3)
 
 
 def test_reset_clears_everything() -> None:

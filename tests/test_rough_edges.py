@@ -272,7 +272,8 @@ def test_the_start_up_summary_shows_the_ports_in_use() -> None:
          "--port-rx", str(rx), "--port-tx", str(tx), "--port", str(stream)],
     )  # fmt: skip
     assert result.exit_code == 0, result.output
-    assert f"SimMeR TCP on 127.0.0.1:{rx}/{tx}" in result.output
+    assert f"127.0.0.1 rx {rx}, tx {tx}" in result.output
+    assert f"port {stream}" in result.output
     assert "61200" not in result.output
 
 
@@ -370,22 +371,20 @@ def fake_repo(tmp_path: Path, script: str) -> tuple[Path, Path]:
 
 
 @pytest.mark.skipif(shutil.which("bash") is None, reason="the scripts are bash")
-@pytest.mark.parametrize("script", ["run.sh", "test.sh"])
-def test_scripts_install_only_when_needed(tmp_path: Path, script: str) -> None:
+@pytest.mark.parametrize(
+    ("script", "expected"),
+    [
+        ("run.sh", ["python3 scripts/setup.py", "simmer run --speed 2"]),
+        ("test.sh", ["python3 scripts/setup.py --test", "ruff check .", "ruff format --check .",
+                     "mypy", "pytest --speed 2"]),
+    ],
+)  # fmt: skip
+def test_scripts_set_up_then_work(tmp_path: Path, script: str, expected: list[str]) -> None:
+    """The set-up itself (only when needed) is scripts/setup.py's: test_fresh_clone.py."""
     path, calls = fake_repo(tmp_path, script)
     env = {**os.environ, "PATH": f"{tmp_path / 'bin'}{os.pathsep}{os.environ['PATH']}"}
-
-    def installs() -> int:
-        calls.unlink(missing_ok=True)
-        subprocess.run(["bash", str(path)], env=env, check=True, capture_output=True)
-        return calls.read_text(encoding="utf-8").count("pip install")
-
-    assert installs() == 2  # a fresh clone: pip, then SimMeR
-    assert installs() == 0  # nothing changed: straight to work
-    pyproject = path.parent.parent / "pyproject.toml"
-    later = pyproject.stat().st_mtime + 10
-    os.utime(pyproject, (later, later))
-    assert installs() == 2  # pyproject.toml changed
+    subprocess.run(["bash", str(path), "--speed", "2"], env=env, check=True, capture_output=True)
+    assert [line.strip() for line in calls.read_text(encoding="utf-8").splitlines()] == expected
 
 
 def test_docs_say_that_configurations_run_code() -> None:

@@ -31,7 +31,7 @@ def refuse(tmp_path: Path, text: str, *words: str) -> float:
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(text)
     start = time.process_time()
-    result = CliRunner().invoke(app, ["sweep", str(sweep)])
+    result = CliRunner().invoke(app, ["sweep", str(sweep), "-o", str(tmp_path / "sweep-results")])
     seconds = time.process_time() - start
     assert result.exit_code == 1, result.output
     assert result.exception is None or isinstance(result.exception, SystemExit), result.exception

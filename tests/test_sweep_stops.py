@@ -98,7 +98,7 @@ def sweep_folder(tmp_path: Path) -> Path:
 
 def start_sweep(folder: Path, *extra: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [SIMMER, "sweep", folder / "sweep.toml", "--workers", "2", *extra],
+        [SIMMER, "sweep", folder / "sweep.toml", "-o", folder / "results", "--workers=2", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -136,14 +136,14 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     assert "--resume goes on" in stderr
     assert "Traceback" not in stderr
     assert_all_gone(sweep, below, sweep_folder)
-    results = (sweep_folder / "sweep-results" / "results.csv").read_text().splitlines()
+    results = (sweep_folder / "results" / "results.csv").read_text().splitlines()
     assert len(results) == 1 + 2  # the header and the two runs that finished
     (sweep_folder / "release").write_text("")
     resumed = start_sweep(sweep_folder, "--resume")
     stdout, stderr = resumed.communicate(timeout=150)
     assert resumed.returncode == 0, stderr
     assert "(2 run now" in stdout
-    results = (sweep_folder / "sweep-results" / "results.csv").read_text().splitlines()
+    results = (sweep_folder / "results" / "results.csv").read_text().splitlines()
     assert len(results) == 1 + 4
 
 

@@ -388,7 +388,7 @@ def test_hud_shows_the_runs_outcome(window: Window) -> None:
     texts = hud_texts(window)
     assert texts[f"{sim.dt:.2f} s"] == TEXT  # the stopwatch runs from the first motion ...
     assert texts["0.1 in"] == TEXT  # ... and the path grows
-    assert texts["2 replies, 1 NaN"] == TEXT
+    assert texts["2 replies: 0 busy, 1 NaN"] == TEXT
     assert texts["0"] == TEXT  # no collisions
     sim.run_until_idle()
     sim.step(10)

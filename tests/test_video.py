@@ -255,10 +255,13 @@ def test_v_starts_and_stops_a_video_and_the_hud_says_so(
     hud = RecordingRenderer()
     paint_hud(hud, window.bridge.latest)
     assert ("REC", (28, 95), ALARM, 18, False) in hud.of("text")
+    path = tmp_path / recording
+    said = f"recording the video {path} (V stops it)"
+    assert said in [args[0] for args in hud.of("text")]  # the file's name, in the HUD
     sim.step(30)  # half a simulated second
     press(window, pygame.K_v)
     assert window.bridge.latest.recording is None
-    path = tmp_path / recording
+    assert window.bridge.latest.notice == f"saved the video {path} (0.5 s)"
     frames, stream, length = decoded(path)
     assert len(frames) == 16
     assert (stream.width, stream.height) == (1576, 920)
@@ -285,12 +288,14 @@ def test_p_saves_a_screenshot_of_the_window(
 ) -> None:
     monkeypatch.setattr(time, "strftime", lambda _: "simmer-now")
     window.draw()
+    shown = pygame.surfarray.array3d(window.screen)
     press(window, pygame.K_p)
     press(window, pygame.K_p)  # a second one in the same second gets its own name
     first, second = tmp_path / "simmer-now.png", tmp_path / "simmer-now-2.png"
     assert sorted(tmp_path.iterdir()) == [second, first]
     saved = pygame.surfarray.array3d(pygame.image.load(str(first)))
-    assert np.array_equal(saved, pygame.surfarray.array3d(window.screen))
+    assert np.array_equal(saved, shown)
+    assert window.bridge.latest.notice == f"saved the screenshot {second}"  # named in the HUD
     assert "P" in dict(HELP)
 
 

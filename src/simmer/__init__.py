@@ -19,7 +19,7 @@ _LAZY = {
     "Device": "simmer.devices",
     "DeviceParams": "simmer.devices",
     "register_device_kind": "simmer.devices",
-    "Pose": "simmer.geometry",
+    "Pose": "simmer.pose",
     "Simulation": "simmer.world",
 }
 
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from simmer.config import SimConfig, load_config
     from simmer.devices import Device, DeviceParams, register_device_kind
     from simmer.errors import ConfigError, SimmerError
-    from simmer.geometry import Pose
+    from simmer.pose import Pose
     from simmer.world import Simulation
 
 

@@ -13,20 +13,69 @@ from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.console import Console
+from typer import _click  # the click typer ships: its Command is what a command overrides
+from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
-from simmer.config import SimConfig, load_config, summarize
 from simmer.errors import ConfigError
 from simmer.ports import STREAM_PORT
 
 if TYPE_CHECKING:
+    from simmer.config import SimConfig
     from simmer.ui.replay_model import Recording
+
+
+class _Command(TyperCommand):
+    """A command whose help shows arguments as ``CONFIG`` / ``[CONFIG]`` with their help, as
+    click does (typer writes ``{config}`` and ``<path>``)."""
+
+    def collect_usage_pieces(self, ctx: _click.Context) -> list[str]:
+        """``[OPTIONS] CONFIG``: an optional argument in brackets, a required one bare."""
+        pieces = [self.options_metavar] if self.options_metavar else []
+        for param in self.get_params(ctx):
+            if isinstance(param, TyperArgument):
+                name = _argument_name(param)
+                pieces.append(name if param.required else f"[{name}]")
+        return pieces
+
+    def format_options(self, ctx: _click.Context, formatter: _click.HelpFormatter) -> None:
+        """The arguments by name and help, then the options as typer writes them."""
+        params = self.get_params(ctx)
+        rows = [(_argument_name(p), p.help or "") for p in params if isinstance(p, TyperArgument)]
+        options = [
+            record
+            for p in params
+            if not isinstance(p, TyperArgument) and (record := p.get_help_record(ctx))
+        ]
+        for title, entries in (("Arguments", rows), ("Options", options)):
+            if entries:
+                with formatter.section(title):
+                    formatter.write_dl(entries)
+
+
+def _argument_name(param: TyperArgument) -> str:
+    return param.metavar or (param.name or "").upper()
+
+
+class _Group(TyperGroup):
+    """The ``simmer`` group, whose ``--help`` costs nothing when a command is run."""
+
+    def get_help_option(self, ctx: _click.Context) -> TyperOption | None:
+        """The help option, "not given" being False: typer coerces a value that is not a bool
+        through pydantic, and building that for ``simmer run --help`` took 50 ms and 14 MB."""
+        option = super().get_help_option(ctx)
+        if option is not None:
+            option.default = False
+        return option
+
 
 app = typer.Typer(
     name="simmer",
+    cls=_Group,
     help="SimMeR, the Simulator for Mechatronics Robots.",
     no_args_is_help=False,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help as written: [u0] stays, no boxes, no <bool>
 )
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
@@ -52,8 +101,18 @@ ConfigArg = Annotated[
         help="Configuration file (.toml, or a SimMeR config.py). Default: the built-in lab maze "
         "and rover.",
         show_default=False,
+        metavar="CONFIG",
     ),
 ]
+RunFolder = Annotated[
+    Path, typer.Argument(help="A run folder (simmer run --record DIR).", metavar="DIR")
+]
+
+
+def _example(*lines: str) -> str:
+    """A help page's example block, printed as written (click does not re-wrap a paragraph
+    that starts with \\b)."""
+    return "\b\nExample:\n" + "\n".join(f"  {line}" for line in lines)
 
 
 def _print_version(wanted: bool) -> None:
@@ -99,12 +158,46 @@ def _report_config_warnings(config: SimConfig) -> None:
         err.print(f"  {issue.render(config.source)}", markup=False, style="yellow")
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Make a folder of your own for Lab 1 (rover, programs, sweeps).",
+    epilog=_example("simmer new lab1", "cd lab1", "simmer check my_rover.toml"),
+)
+def new(
+    folder: Annotated[
+        Path, typer.Argument(help="The folder to make (new, or empty).", metavar="DIR")
+    ],
+) -> None:
+    """Make a folder of your own for Lab 1: the lab's rover (my_rover.toml), the example
+    programs, two sweep files and a README pointing at the lab page, whose every command runs
+    from this folder."""
+    from simmer.newfolder import FolderExists, lab_page, new_folder
+
+    try:
+        written = new_folder(folder)
+    except (FolderExists, OSError) as exc:
+        err.print(f"cannot make the folder: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"made {folder}: {', '.join(path.name for path in written)}", markup=False)
+    out.print(
+        f"next: cd {folder}, then simmer check my_rover.toml; the lab page: {lab_page()}",
+        markup=False,
+    )
+
+
+@app.command(
+    cls=_Command,
+    short_help="Check a configuration: OK and a summary, or every problem.",
+    epilog=_example("simmer check my_rover.toml"),
+)
 def check(
-    config: Annotated[Path, typer.Argument(help="Configuration file to check.")],
+    config: Annotated[Path, typer.Argument(help="Configuration file to check.", metavar="CONFIG")],
 ) -> None:
     """Check a configuration and call each device once: print OK and a summary, or every
-    problem found (exit status 1)."""
+    problem found, each with its file, line, key and fix (exit status 1)."""
+    from simmer.config import load_config, summarize
+    from simmer.config.loader import placed_issues
+
     with _exit_refused():
         try:
             loaded = load_config(config)
@@ -118,7 +211,7 @@ def check(
 
         issues = probe_devices(loaded)
     if issues:
-        _report_config_error(ConfigError(config, issues))
+        _report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
@@ -145,9 +238,15 @@ def _exit_refused() -> Iterator[None]:
         os._exit = real
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="List every configuration key and device setting.",
+    epilog=_example("simmer keys --markdown > keys.md"),
+)
 def keys(
-    markdown: Annotated[bool, typer.Option(help="Print the reference as Markdown.")] = False,
+    markdown: Annotated[
+        bool, typer.Option("--markdown", help="Print the reference as Markdown.")
+    ] = False,
 ) -> None:
     """List every configuration key and device setting, with defaults."""
     from simmer.config.reference import reference_markdown
@@ -162,12 +261,17 @@ def keys(
         out.print(Markdown("\n".join(lines)))
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Run the simulator: a window, or headless; your program too.",
+    epilog=_example('simmer run my_rover.toml --headless --program "python dead_reckoning.py"'),
+)
 def run(
     config: ConfigArg = None,
-    headless: Annotated[bool, typer.Option(help="Run without a window.")] = False,
+    headless: Annotated[bool, typer.Option("--headless", help="Run without a window.")] = False,
     seconds: Annotated[
-        float | None, typer.Option(help="Stop after this many simulated seconds.")
+        float | None,
+        typer.Option(help="Stop after this many simulated seconds.", metavar="SECONDS"),
     ] = None,
     speed: Annotated[
         str | None,
@@ -176,14 +280,19 @@ def run(
             "headless --program run). Without the lockstep clock, results at 'max' depend on "
             "the machine.",
             show_default=False,
+            metavar="SPEED",
         ),
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="Noise seed (overrides the configuration's).")
+        int | None,
+        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N"),
     ] = None,
     host: Annotated[
         str | None,
-        typer.Option(help="Address to listen on (default: the configuration's, 127.0.0.1)."),
+        typer.Option(
+            help="Address to listen on (default: the configuration's, 127.0.0.1).",
+            metavar="ADDRESS",
+        ),
     ] = None,
     port_rx: Annotated[
         int | None,
@@ -192,6 +301,7 @@ def run(
             "0: any free port).",
             min=0,
             max=65535,
+            metavar="PORT",
         ),
     ] = None,
     port_tx: Annotated[
@@ -201,25 +311,32 @@ def run(
             "0: any free port).",
             min=0,
             max=65535,
+            metavar="PORT",
         ),
     ] = None,
     port: Annotated[
         int | None,
         typer.Option(
-            help="Persistent protocol port (default 61202; 0: any free port).", min=0, max=65535
+            help="Persistent protocol port (default 61202; 0: any free port).",
+            min=0,
+            max=65535,
+            metavar="PORT",
         ),
     ] = None,
     serial: Annotated[
-        bool, typer.Option(help="Also serve a virtual serial port (a pseudo-terminal).")
+        bool,
+        typer.Option("--serial", help="Also serve a virtual serial port (a pseudo-terminal)."),
     ] = False,
     serial_link: Annotated[
-        Path | None, typer.Option(help="Make a stable link to the serial port at this path.")
+        Path | None,
+        typer.Option(help="Make a stable link to the serial port at this path.", metavar="PATH"),
     ] = None,
     protocol: Annotated[
         Protocol | None,
         typer.Option(
             help="What the two-port scheme and the serial port speak (default: the "
-            "configuration's; a SimMeR v1.2 config.py says framed)."
+            "configuration's; a SimMeR v1.2 config.py says framed).",
+            metavar="packed|framed",
         ),
     ] = None,
     reply_bytes: Annotated[
@@ -229,6 +346,7 @@ def run(
             "configuration's; a v1.0 config.py says 8).",
             min=4,
             max=8,
+            metavar="4|8",
         ),
     ] = None,
     program: Annotated[
@@ -237,6 +355,7 @@ def run(
             help='Start this control program (e.g. "python my_robot.py") on free ports and '
             "end the run when it exits; its clock follows simulated time (lockstep).",
             show_default=False,
+            metavar="COMMAND",
         ),
     ] = None,
     clock: Annotated[
@@ -246,6 +365,7 @@ def run(
             "when the program sleeps (and per message), so runs repeat exactly (default: "
             "lockstep with --program, else realtime).",
             show_default=False,
+            metavar="realtime|lockstep",
         ),
     ] = None,
     link_delay: Annotated[
@@ -254,6 +374,7 @@ def run(
             help="Lockstep: simulated seconds each message costs (default: one step).",
             min=0,
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     timeout: Annotated[
@@ -263,6 +384,7 @@ def run(
             "wall-clock seconds; exit status 124.",
             min=0,
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     record: Annotated[
@@ -271,16 +393,22 @@ def run(
             help="Record the run into this folder (a new one): manifest.json, events.jsonl, "
             "trace.csv, report.json and report.md.",
             show_default=False,
+            metavar="DIR",
         ),
     ] = None,
     video: Annotated[
         Path | None,
         typer.Option(
             help="Record what the window shows into this .mp4 (H.264) or .gif file, at 30 "
-            "frames per simulated second, with or without a window.",
+            "frames per simulated second, with or without a window; an existing file is kept "
+            "unless --force.",
             show_default=False,
+            metavar="FILE",
         ),
     ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Let --video replace an existing file.")
+    ] = False,
     record_limit: Annotated[
         float,
         typer.Option(
@@ -295,6 +423,7 @@ def run(
     With --program, the run ends when the program exits (with its exit status), at --seconds
     of simulated time (status 3) or at --timeout wall seconds (status 124).
     """
+    from simmer.config import load_config, summarize, with_settings
     from simmer.serve import parse_speed
     from simmer.world import Simulation
 
@@ -306,7 +435,7 @@ def run(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
     if video is not None:
-        _check_video(video)
+        _check_video(video, force=force)
     if program is not None:  # this run's own free ports, so that runs can share a machine
         port_rx = 0 if port_rx is None else port_rx
         port_tx = 0 if port_tx is None else port_tx
@@ -320,9 +449,12 @@ def run(
         "port_rx": port_rx or None,  # 0 is no setting: the transport lines say which port
         "port_tx": port_tx or None,
     }
+    given = {key: value for key, value in overrides.items() if value is not None}
+    flags = " ".join(f"--{key.replace('_', '-')} {value}" for key, value in given.items())
     try:
         loaded = load_config(config)
-        loaded = loaded.with_settings(**{k: v for k, v in overrides.items() if v is not None})
+        if given:  # checked as the file's own settings are (port_rx == port_tx ...)
+            loaded = with_settings(loaded, given, f"{loaded.source} with {flags}")
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
@@ -336,8 +468,7 @@ def run(
     _report_config_warnings(loaded)
     if loaded.origin:
         out.print(loaded.origin, markup=False)
-    out.print(summarize(sim.config), markup=False)
-    out.print(f"noise seed {sim.seed}", markup=False)
+    out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
     from simmer.errors import SimmerError
     from simmer.serve import serve
 
@@ -425,15 +556,23 @@ def _recorded_run_limits(
     return seconds, timeout
 
 
-def _check_video(path: Path) -> None:
-    """Refuse a video file that cannot be written before any port opens; make its folder if
-    it is missing (as --record does: ``--video runs/task1.mp4`` in a new project)."""
+def _check_video(path: Path, *, force: bool) -> None:
+    """Refuse a video file that cannot be written, or that exists unless ``force``, before any
+    port opens; make its folder if it is missing (as --record does: ``--video runs/task1.mp4``
+    in a new project)."""
     from simmer.ui.video import check_video_path
 
     try:
         check_video_path(path)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--video") from None
+    if path.exists() and not force:
+        err.print(
+            f"the video {path} exists already: give another name, or add --force to replace it",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)
     folder = path.parent
     with contextlib.suppress(OSError):  # said just below, as for a folder not writable
         folder.mkdir(parents=True, exist_ok=True)
@@ -482,12 +621,20 @@ def _serve_failure(exc: OSError, host: str) -> str:
     return f"cannot serve: {exc}"
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Convert a SimMeR config.py to the native TOML format.",
+    epilog=_example("simmer convert config.py -o my_rover.toml"),
+)
 def convert(
-    config: Annotated[Path, typer.Argument(help="A SimMeR config.py to convert.")],
+    config: Annotated[
+        Path, typer.Argument(help="A SimMeR config.py to convert.", metavar="CONFIG")
+    ],
     output: Annotated[
         Path | None,
-        typer.Option("--output", "-o", help="TOML file to write (default: print it)."),
+        typer.Option(
+            "--output", "-o", help="TOML file to write (default: print it).", metavar="FILE"
+        ),
     ] = None,
 ) -> None:
     """Convert a SimMeR config.py to the native TOML format, keeping its comments."""
@@ -504,10 +651,12 @@ def convert(
         out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
 
 
-@app.command()
-def plot(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
-) -> None:
+@app.command(
+    cls=_Command,
+    short_help="Draw a recorded run: path.png and sensors.png.",
+    epilog=_example("simmer plot runs/bias"),
+)
+def plot(folder: RunFolder) -> None:
     """Draw a recorded run into its folder: path.png (the path over the maze, commands
     numbered, collisions marked) and sensors.png (readings against time); report.md links
     them."""
@@ -580,9 +729,13 @@ def _load_recording(
     return recording
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Replay a recorded run in a window (or --check it).",
+    epilog=_example("simmer replay runs/bias"),
+)
 def replay(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    folder: RunFolder,
     check: Annotated[
         bool,
         typer.Option(
@@ -612,9 +765,13 @@ def replay(
         raise typer.Exit(1) from None
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Cut a clip of a recorded run into a video (.mp4 or .gif).",
+    epilog=_example("simmer render runs/manual --from 5 --to 20 -o manual_clip.mp4"),
+)
 def render(
-    folder: Annotated[Path, typer.Argument(help="A run folder (simmer run --record DIR).")],
+    folder: RunFolder,
     output: Annotated[
         Path | None,
         typer.Option(
@@ -622,6 +779,7 @@ def render(
             "--output",
             help="The clip: .mp4 (H.264) or .gif (default: replay.mp4 in the run folder).",
             show_default=False,
+            metavar="FILE",
         ),
     ] = None,
     start: Annotated[
@@ -630,6 +788,7 @@ def render(
             "--from",
             help="Start, in seconds from the start of the run (default: its start).",
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     end: Annotated[
@@ -638,6 +797,7 @@ def render(
             "--to",
             help="End, in seconds from the start of the run (default: its end).",
             show_default=False,
+            metavar="SECONDS",
         ),
     ] = None,
     trust: TrustOption = False,
@@ -667,32 +827,47 @@ class Engine(StrEnum):
     dask = "dask"
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Run a program over seeds and settings: success rates.",
+    epilog=_example("simmer sweep sweep_dead_reckoning.toml --workers 2"),
+)
 def sweep(
-    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (.toml).")],
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (.toml).", metavar="SWEEP")],
     output: Annotated[
         Path | None,
         typer.Option(
             "-o",
             "--output",
-            help="Folder for results.csv and summary.md "
-            "(default: SWEEP-results beside the sweep file)",
+            help="Folder for results.csv and summary.md (default: SWEEP-results in the current "
+            "folder, SWEEP being the sweep file's name without .toml).",
             show_default=False,
+            metavar="DIR",
         ),
     ] = None,
     workers: Annotated[
         int | None,
-        typer.Option(help="Worker processes (default: one per core).", min=1, show_default=False),
+        typer.Option(
+            help="Worker processes (default: one per core).",
+            min=1,
+            show_default=False,
+            metavar="N",
+        ),
     ] = None,
     resume: Annotated[
-        bool, typer.Option(help="Keep the runs already in results.csv; run only the others.")
+        bool,
+        typer.Option("--resume", help="Keep the runs already in results.csv; run only the others."),
     ] = False,
-    engine: Annotated[Engine, typer.Option(help="Where runs go: local processes or Dask.")] = (
-        Engine.local
-    ),
+    engine: Annotated[
+        Engine,
+        typer.Option(help="Where runs go: local processes or Dask.", metavar="local|dask"),
+    ] = Engine.local,
     address: Annotated[
         str | None,
-        typer.Option(help="Dask scheduler (tcp://host:8786); none: a local Dask cluster."),
+        typer.Option(
+            help="Dask scheduler (tcp://host:8786); none: a local Dask cluster.",
+            metavar="ADDRESS",
+        ),
     ] = None,
 ) -> None:
     """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
@@ -705,7 +880,7 @@ def sweep(
     except (SweepError, RuntimeError) as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
-    folder = output or sweep_file.parent / f"{sweep_file.stem}-results"
+    folder = output or Path(f"{sweep_file.stem}-results")  # the student's folder, not the file's
     try:
         done = run_sweep(
             spec,
@@ -739,22 +914,35 @@ def sweep(
     )
 
 
-@app.command()
+@app.command(
+    cls=_Command,
+    short_help="Type commands (u0, w0-6) and see the replies.",
+    epilog=_example("simmer console          (then type u0,u1,u2,u3 or w0-6; help lists them)"),
+)
 def console(
-    host: Annotated[str, typer.Option(help="Simulator address.")] = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="Persistent protocol port.")] = STREAM_PORT,
+    host: Annotated[str, typer.Option(help="Simulator address.", metavar="ADDRESS")] = (
+        "127.0.0.1"
+    ),
+    port: Annotated[
+        int, typer.Option(help="Persistent protocol port.", metavar="PORT")
+    ] = STREAM_PORT,
     two_port: Annotated[
-        bool, typer.Option(help="Use SimMeR's two-port scheme (61200/61201) instead.")
+        bool,
+        typer.Option("--two-port", help="Use SimMeR's two-port scheme (61200/61201) instead."),
     ] = False,
     serial: Annotated[
-        str | None, typer.Option(help="Talk to a serial port (virtual or the robot's) instead.")
+        str | None,
+        typer.Option(
+            help="Talk to a serial port (virtual or the robot's) instead.", metavar="PORT"
+        ),
     ] = None,
-    baud: Annotated[int, typer.Option(help="Serial baud rate.")] = 9600,
+    baud: Annotated[int, typer.Option(help="Serial baud rate.", metavar="BAUD")] = 9600,
     framed: Annotated[
         bool,
         typer.Option(
+            "--framed",
             help="Speak SimMeR v1.2's framed text ([u0] -> [u0:15.45]) over the two-port "
-            "scheme or --serial, as a simulator with protocol = 'framed' (a v1.2 config.py) does."
+            "scheme or --serial, as a simulator with protocol = 'framed' (a v1.2 config.py) does.",
         ),
     ] = False,
 ) -> None:

@@ -108,9 +108,19 @@ class StreamLink:
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
 
-    def clock(self, message: str) -> float:
-        """Send a clock message (``!sleep S``, ``!idle``, ``!time``); the simulated time."""
-        (value,) = self.exchange(message)
+    def clock(self, message: str, wait: float | None = None) -> float:
+        """Send a clock message (``!sleep S``, ``!idle``, ``!time``); the simulated time.
+        ``wait``: wall-clock seconds to wait for the answer instead of the link's timeout (an
+        ``!idle`` in real time lasts as long as the move)."""
+        if wait is None:
+            (value,) = self.exchange(message)
+        else:
+            before = self._sock.gettimeout()
+            self._sock.settimeout(wait)
+            try:
+                (value,) = self.exchange(message)
+            finally:
+                self._sock.settimeout(before)
         if math.isnan(value):
             raise ReplyTimeout(f"the simulator refused the clock message {message!r}")
         return value
@@ -278,9 +288,17 @@ class Client:
             time.sleep(seconds)
 
     def wait_idle(self, drive_id: str = "w0", poll: float = 0.01, timeout: float = 600.0) -> None:
-        """Wait until no drive is moving (a zero-length move of ``drive_id`` is accepted)."""
+        """Wait until no drive is moving (a zero-length move of ``drive_id`` is accepted).
+
+        Over the persistent protocol the simulator itself answers ``!idle`` once no drive
+        moves (in simulated time in lockstep, else in real time), so the wait sends no stream
+        of busy ``w0-0`` polls; over the two-port scheme or a serial port (the robot) it polls
+        every ``poll`` seconds. Either way one ``w0-0`` confirms it.
+        """
         if self._clock is not None:
             self._clock.clock("!idle")
+        elif isinstance(self.link, StreamLink):
+            self.link.clock("!idle", wait=timeout)
         deadline = time.monotonic() + timeout
         while not math.isinf(self.drive(drive_id, 0)):
             if time.monotonic() > deadline:

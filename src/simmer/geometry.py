@@ -14,32 +14,19 @@ so rays walk the grid cell by cell (Amanatides & Woo); a read therefore costs th
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
+
+from simmer.pose import Pose as Pose  # noqa: PLC0414  (re-exported: plug-ins import it here)
+from simmer.pose import Vec2 as Vec2  # noqa: PLC0414
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 _EPS = 1e-12
 _jit = numba.njit(cache=True, nogil=True, fastmath=False)
-
-
-class Vec2(NamedTuple):
-    """An immutable 2-D point or vector in inches."""
-
-    x: float
-    y: float
-
-
-class Pose(NamedTuple):
-    """An immutable robot pose: position in inches, heading in degrees (BEHAVIOUR §1)."""
-
-    x: float
-    y: float
-    heading: float
 
 
 def polygon_gap(a: FloatArray, b: FloatArray) -> float:

@@ -31,7 +31,7 @@ import re
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 STOP_ID = "xx"
 SEPARATOR = "-"
@@ -192,6 +192,9 @@ class Decoded:
     persistent protocol closes the connection after the reply (its framing cannot be trusted)."""
     clock: bool = False
     """A clock message (persistent protocol, ``!...``; see :func:`parse_clock`)."""
+    size: int = 0
+    """Bytes of the transport's stream this message used (its line ending too): what the
+    lockstep clock counts as taken once the message is answered (see :func:`parse_clock`)."""
 
 
 def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
@@ -274,8 +277,21 @@ def read_frame_header(header: bytes) -> tuple[int, int]:
 # --------------------------------------------------------------------------- reply codecs
 
 
+Replies = tuple[Decoded, Sequence[float]]
+"""One answered message: what was asked and its reply values."""
+
+
 class ReplyCodec(Protocol):
-    """How a transport reads a message from bytes and writes its reply values as bytes."""
+    """How a transport reads a message from bytes and writes its reply values as bytes.
+
+    ``keeps`` is what the original's two-port transmit buffer held while nobody collected
+    it (BEHAVIOUR §6.4): ``"first"`` (v1.0/v1.1: the first waiting reply; later ones were
+    dropped) or ``"all"`` (v1.2: every reply, sent together in one frame)."""
+
+    @property
+    def keeps(self) -> str:
+        """``"first"`` or ``"all"`` (see the class doc)."""
+        ...
 
     def decode(self, data: bytes) -> Decoded:
         """The message in ``data``; ``count == 0`` with no text means: send nothing back."""
@@ -285,6 +301,10 @@ class ReplyCodec(Protocol):
         """The reply to ``decoded`` (``b""``: nothing to send)."""
         ...
 
+    def encode_many(self, answered: Sequence[Replies]) -> bytes:
+        """The replies to several messages as one packet (``b""``: nothing to send)."""
+        ...
+
 
 @dataclass(frozen=True)
 class PackedCodec:
@@ -292,6 +312,7 @@ class PackedCodec:
 
     width: int = 4
     encoding: str = "utf-8"
+    keeps: ClassVar[str] = "first"
 
     def decode(self, data: bytes) -> Decoded:
         """The text of the bytes (see :func:`decode_message`)."""
@@ -300,6 +321,10 @@ class PackedCodec:
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """The values packed, no framing."""
         return pack_replies(values, self.width)
+
+    def encode_many(self, answered: Sequence[Replies]) -> bytes:
+        """Every message's values packed, one after another."""
+        return b"".join(self.encode(decoded, values) for decoded, values in answered)
 
 
 def unwrap_frames(text: str, start: str = "[", end: str = "]") -> str | None:
@@ -331,6 +356,7 @@ class FramedCodec:
     end: str = "]"
     round_digits: int = 3
     encoding: str = "ascii"
+    keeps: ClassVar[str] = "all"
 
     def decode(self, data: bytes) -> Decoded:
         """The commands of the frames in ``data``; no complete frame, or a message over a
@@ -362,11 +388,19 @@ class FramedCodec:
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """One frame with an ``id:value`` entry per command, in order."""
-        if not values:
+        return self.encode_many([(decoded, values)])
+
+    def encode_many(self, answered: Sequence[Replies]) -> bytes:
+        """One frame with the entries of every message, in order, as v1.2's ``make_tx_packet``
+        sends its whole transmit buffer (``[w0:True,w0:True,g0:12.3]``); nothing if none."""
+        entries = []
+        for decoded, values in answered:
+            ids = command_ids(decoded.text) if decoded.text is not None else list(decoded.ids)
+            entries += [self.entry(i, v) for i, v in zip(ids, values, strict=False)]
+        if not entries:
             return b""
-        ids = command_ids(decoded.text) if decoded.text is not None else list(decoded.ids)
-        entries = ",".join(self.entry(i, v) for i, v in zip(ids, values, strict=False))
-        return f"{self.start}{entries}{self.end}".encode(self.encoding, errors="replace")
+        text = f"{self.start}{','.join(entries)}{self.end}"
+        return text.encode(self.encoding, errors="replace")
 
     def entry(self, device_id: str, value: float) -> str:
         """One reply entry, ``id:value``."""
@@ -413,21 +447,41 @@ CLOCK_PREFIX = b"!"
 
 @dataclass(frozen=True)
 class ClockMessage:
-    """``!sleep S`` (advance S seconds), ``!idle`` (until no drive moves) or ``!time``."""
+    """``!sleep S`` (advance S seconds), ``!idle`` (until no drive moves), ``!time`` (the
+    clock) or ``!sync`` (nothing but the ``after`` condition).
+
+    ``after`` (written `` @N`` at the end) is how many bytes the program has written towards
+    the simulator on its other connections so far: the simulator acts on the clock message
+    only once it has taken and answered that many, so a message the program sent before it
+    slept is acted on before the sleep, whichever connection arrives first. None: no condition.
+    """
 
     kind: str
     seconds: float = 0.0
+    after: int | None = None
+
+
+CLOCK_KINDS = ("time", "idle", "sync")
+"""Clock messages without an argument (``!sleep`` takes the seconds)."""
 
 
 def parse_clock(text: str) -> ClockMessage:
     """Parse a clock message; raises ``ValueError`` saying what is wrong."""
     words = text.strip().lstrip("!").split()
-    if words in (["time"], ["idle"]):
-        return ClockMessage(words[0])
+    after = None
+    if len(words) > 1 and words[-1].startswith("@"):
+        count = words.pop()[1:]
+        if count.isascii() and count.isdigit() and len(count) <= 18:
+            after = int(count)
+        else:
+            words = []  # refused below
+    if len(words) == 1 and words[0] in CLOCK_KINDS:
+        return ClockMessage(words[0], after=after)
     if len(words) == 2 and words[0] == "sleep" and _NUMBER.fullmatch(words[1]):
         seconds = float(words[1])
         if 0 <= seconds <= MAX_ABS_VALUE:
-            return ClockMessage("sleep", seconds)
+            return ClockMessage("sleep", seconds, after)
     raise ValueError(
-        f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle' or '!time'"
+        f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time' or "
+        "'!sync', each optionally followed by ' @BYTES'"
     )

@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from simmer.lockstep import FREE_TIME_READS
-from simmer.protocol import parse_clock, printable
+from simmer.protocol import ClockMessage, parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
@@ -43,11 +43,23 @@ MAX_WAIT = 0.05
 MAX_LOGGED = 3
 """Why-NaN lines logged per message; the rest are counted in one more line, so a message of
 1,000 bad commands writes four lines, not 1,000."""
+LOG_LINES_PER_SECOND = 10
+"""Log lines about one client's bad messages per wall-clock second; past it they are counted
+and the count is logged once the second is over (a client flooding bad commands writes ten
+lines a second, not thousands). A client is its host and transport: a two-port client uses a
+new port for every message."""
+MAX_LOG_CLIENTS = 1024
+"""Clients whose log lines are counted at once (the count starts afresh past it)."""
 MAX_REASONS = 20
 """Why-NaN reasons kept per message for the client (the persistent protocol's ``?``)."""
 
 IDLE_LIMIT = 600.0
 """Longest ``!idle`` wait, in simulated seconds (a drive that never finishes cannot hang it)."""
+SYNC_WAIT = 5.0
+"""Wall seconds a clock message waits for the bytes it says the program sent before it (its
+`` @N``) to arrive and be answered. They come within a millisecond on a working link; bytes
+that never make a message (a line with no end, a two-port connection left open) would stall
+every sleep, so past this the clock goes on, with a warning, and counts them as taken."""
 EPSILON = 1e-9
 
 FrameCallback = Callable[["Runner"], bool]
@@ -61,6 +73,60 @@ class _Wait:
     request: Request
     until: float | None
     deadline: float = math.inf
+
+
+class _LogBudget:
+    """Log lines per client, at most :data:`LOG_LINES_PER_SECOND` a wall second; the rest
+    are counted and said in one line when that client's second is over."""
+
+    def __init__(self) -> None:
+        self._spent: dict[str, tuple[float, int, int]] = {}  # second started, lines, held back
+        self.holding = False
+        """Whether some client's lines are held back (:meth:`flush` says how many)."""
+
+    def flush(self) -> None:
+        """Say how many lines were held back for each client whose second is over."""
+        now = time.monotonic()
+        self.holding = False
+        for who, (started, lines, held) in list(self._spent.items()):
+            if not held:
+                continue
+            if now - started < 1.0:
+                self.holding = True
+                continue
+            log.warning("%s: %d more log lines in one second, not written", who, held)
+            self._spent[who] = (started, lines, 0)
+
+    def log(self, client: str, level: int, text: str, *args: object) -> None:
+        """Log ``text % args`` about ``client`` (already printable) unless its budget is
+        spent."""
+        who = client.rsplit(":", 1)[0] if client.startswith(("two-port ", "stream ")) else client
+        now = time.monotonic()
+        started, lines, held = self._spent.get(who, (now, 0, 0))
+        if now - started >= 1.0:
+            if held:
+                log.warning("%s: %d more log lines in one second, not written", who, held)
+            started, lines, held = now, 0, 0
+        if lines < LOG_LINES_PER_SECOND:
+            log.log(level, text, *args)
+            lines += 1
+        else:
+            held += 1
+            self.holding = True
+        if len(self._spent) >= MAX_LOG_CLIENTS and who not in self._spent:
+            self._spent.clear()
+        self._spent[who] = (started, lines, held)
+
+
+@dataclass
+class _Held:
+    """A clock message waiting until ``after`` bytes of the program's messages are taken, or
+    the wall-clock ``deadline`` (monotonic)."""
+
+    request: Request
+    clock: ClockMessage
+    after: int
+    deadline: float
 
 
 @dataclass(frozen=True)
@@ -103,6 +169,10 @@ class Runner:
         """Lockstep: the program's clock; the simulation steps until it would pass it."""
         self._reads = 0
         self._waits: list[_Wait] = []
+        self._held: deque[_Held] = deque()
+        self._log = _LogBudget()
+        self._forgiven = 0
+        """Bytes a clock message gave up waiting for (:data:`SYNC_WAIT`), counted as taken."""
 
     @property
     def speed(self) -> float | None:
@@ -152,9 +222,11 @@ class Runner:
         if self.lockstep:
             self.clock = max(self.clock, self.sim.time) + self.link_delay
             self._reads = 0
+        self.bus.took(decoded.size)
         if decoded.text is None:
             error = printable(str(decoded.error))
-            log.warning("bad message from %s: %s", printable(request.client), error)
+            client = printable(request.client)
+            self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
             request.reasons.append(error)
             replies = [math.nan] * decoded.count
             message = f"<{decoded.error}>"
@@ -170,7 +242,8 @@ class Runner:
     # ----------------------------------------------------------------- the clock
 
     def _clock_message(self, request: Request, text: str) -> None:
-        """Register ``!sleep``, ``!idle`` or ``!time`` (see the module doc)."""
+        """Take ``!sleep``, ``!idle``, ``!time`` or ``!sync`` (see the module doc); one whose
+        `` @N`` says the program sent bytes not yet taken waits for them (:meth:`_release`)."""
         try:
             clock = parse_clock(text)
         except ValueError as exc:
@@ -178,6 +251,42 @@ class Runner:
             request.reasons.append(str(exc))
             request.future.set_result([math.nan])
             return
+        if clock.after is None:  # the program's own clock message, on one of its connections
+            self.bus.took(request.decoded.size)
+            self._clock(request, clock)
+            return
+        self._held.append(_Held(request, clock, clock.after, time.monotonic() + SYNC_WAIT))
+        self._release()
+
+    def _release(self) -> bool:
+        """Act on the held clock messages, in order, whose bytes have all been taken (or
+        that waited :data:`SYNC_WAIT`); True if any was. In lockstep only while the
+        simulation has caught up with the clock, so that when a clock message is acted on
+        never depends on whether the bytes before it arrived before or after it."""
+        released = False
+        while self._held and not (self.lockstep and self._due()):
+            held = self._held[0]
+            missing = held.after - self.bus.taken - self._forgiven
+            if missing > 0:
+                if time.monotonic() < held.deadline:
+                    break
+                self._forgiven += missing
+                log.warning(
+                    "%s: %d byte(s) the program wrote before '%s' never arrived as complete "
+                    "messages within %g s (a line with no end, a connection left open?); the "
+                    "clock goes on without them, so this run may not repeat exactly",
+                    printable(held.request.client),
+                    missing,
+                    held.clock.kind,
+                    SYNC_WAIT,
+                )
+            self._held.popleft()
+            self._clock(held.request, held.clock)
+            released = True
+        return released
+
+    def _clock(self, request: Request, clock: ClockMessage) -> None:
+        """Act on a clock message now."""
         sim = self.sim
         if sim.observers:
             asked = clock.seconds if clock.kind == "sleep" else math.nan
@@ -198,7 +307,7 @@ class Runner:
         if clock.kind == "sleep" and clock.seconds > 0:
             self._reads = 0
             self.clock += clock.seconds
-        else:  # a clock read (or sleep(0)): free, unless the program is only waiting on it
+        elif clock.kind != "sync":  # a clock read (or sleep(0)): free, unless only waited on
             self._reads += 1
             if self._reads > FREE_TIME_READS:
                 self._reads = 0
@@ -257,15 +366,21 @@ class Runner:
                 waiting.append(wait)
         self._waits = waiting
 
-    @staticmethod
-    def _report(client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
-        """Log the first few (level, text) records of one message and count the rest; keep
-        the first :data:`MAX_REASONS` for the client."""
+    def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
+        """Log the first few (level, text) records of one message and count the rest (and no
+        more than the client's budget, :class:`_LogBudget`); keep the first
+        :data:`MAX_REASONS` for the client."""
         for level, text in records[:MAX_LOGGED]:
-            log.log(level, "%s: %s", client, text)
+            self._log.log(client, level, "%s: %s", client, text)
         more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])
         if more:
-            log.warning("%s: %d more bad commands in that message, not logged", client, more)
+            self._log.log(
+                client,
+                logging.WARNING,
+                "%s: %d more bad commands in that message, not logged",
+                client,
+                more,
+            )
         reasons.extend(text for _, text in records[:MAX_REASONS])
         if len(records) > MAX_REASONS:
             reasons.append(f"... and {len(records) - MAX_REASONS} more")
@@ -277,6 +392,8 @@ class Runner:
         the next turn, so one busy client cannot keep the others waiting. A request whose
         handling raises gets the exception instead of replies; the loop goes on.
         """
+        if self._held and self._release():
+            timeout = 0.0
         self.bus.wait(timeout)
         served = 0
         for _ in range(self.bus.queued if limit is None else min(limit, self.bus.queued)):
@@ -290,6 +407,10 @@ class Runner:
                 if not request.future.done():
                     request.future.set_exception(exc)
             served += 1
+        if self._held:
+            self._release()
+        if self._log.holding:
+            self._log.flush()
         self._settle()
         return served
 

@@ -14,7 +14,14 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from simmer.lockstep import EXIT_SECONDS, EXIT_TIMEOUT, Program, program_environment
+from simmer.lockstep import (
+    EXIT_SECONDS,
+    EXIT_TIMEOUT,
+    NOT_PYTHON,
+    Program,
+    program_environment,
+    runs_python,
+)
 from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder, RunSetup
 from simmer.record.eventlog import MAX_RECORDING_BYTES
@@ -25,6 +32,7 @@ from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
 
 if TYPE_CHECKING:
+    from simmer.config import SimConfig
     from simmer.transport.bus import CommandBus
     from simmer.ui.video import VideoRecorder
 
@@ -165,6 +173,7 @@ def serve(
             stream_port=stream_port,
             serial=serial,
             serial_link=serial_link,
+            lockstep=lockstep,
         )
         with link:
             if record is not None:
@@ -187,9 +196,13 @@ def serve(
                     f"lockstep clock: simulated time advances only when the program sleeps, "
                     f"and {runner.link_delay:g} s per message"
                 )
+                if program is not None and not runs_python(program):
+                    echo(NOT_PYTHON.format(command=program))
             if program is not None:
                 before = descendants()
-                started = _start_program(program, link, runner.bus, stop, ended, timeout, echo)
+                started = _start_program(
+                    program, link, sim.config, runner.bus, stop, ended, timeout, echo
+                )
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
                 from simmer.ui import run_window
@@ -254,6 +267,7 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 def _start_program(
     command: str,
     link: Link,
+    config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
     ended: list[str],
@@ -267,7 +281,9 @@ def _start_program(
         "port_tx": link.two_port.port_tx,
         "stream": link.stream.port,
     }
-    env = program_environment(ports, link.host)
+    settings = config.settings
+    configured = {"port_rx": settings.port_rx, "port_tx": settings.port_tx}
+    env = program_environment(ports, link.host, configured=configured)
     if link.serial is not None:
         env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
     program = Program.start(command, env)

@@ -3,7 +3,7 @@ built-in default."""
 
 from simmer.config.loader import config_from_toml, default_config, load_config, summarize
 from simmer.config.models import DeviceSpec, Settings, SimConfig
-from simmer.config.validate import config_from_dict
+from simmer.config.validate import config_from_dict, with_settings
 
 __all__ = [
     "DeviceSpec",
@@ -14,4 +14,5 @@ __all__ = [
     "default_config",
     "load_config",
     "summarize",
+    "with_settings",
 ]

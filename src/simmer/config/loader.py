@@ -13,9 +13,11 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from pydantic import BaseModel
+
 from simmer.config import simmer_py
 from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
-from simmer.config.toml_errors import toml_issue
+from simmer.config.toml_errors import toml_issue, with_lines
 from simmer.config.validate import ORIGINAL_RUNS, config_from_dict
 from simmer.errors import ConfigError, ConfigIssue
 
@@ -32,8 +34,11 @@ __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here f
     "config_from_dict",
     "config_from_toml",
     "default_config",
+    "describe_noise",
     "describe_replies",
     "load_config",
+    "noisy_devices",
+    "placed_issues",
     "read_config_data",
     "summarize",
 ]
@@ -117,6 +122,16 @@ def _unreadable_as_config_error(path: Path) -> Iterator[None]:
         raise ConfigError(path, [ConfigIssue("", message)]) from None
 
 
+def placed_issues(path: str | Path, issues: list[ConfigIssue]) -> list[ConfigIssue]:
+    """Problems found in a loaded TOML file (a device failing its first call) with the line
+    of each key, as validation's have them."""
+    path = Path(path)
+    if path.suffix == ".py" or not path.is_file():
+        return issues
+    with _unreadable_as_config_error(path):
+        return with_lines(issues, path.read_text(encoding="utf-8"))
+
+
 @cache
 def default_config() -> SimConfig:
     """The built-in default: SimMeR's maze, block and start pose with the lab rover, noise off."""
@@ -130,7 +145,11 @@ def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
     A file that is not TOML gets one issue in plain words, with its line (a key or table
     written twice names both lines: :mod:`simmer.config.toml_errors`).
     """
-    return config_from_dict(_toml_data(text, source), source, base_dir)
+    data = _toml_data(text, source)
+    try:
+        return config_from_dict(data, source, base_dir)
+    except ConfigError as exc:
+        raise ConfigError(source, with_lines(exc.issues, text)) from None
 
 
 def _toml_data(text: str, source: str) -> dict[str, Any]:
@@ -147,8 +166,11 @@ def _toml_data(text: str, source: str) -> dict[str, Any]:
 # ----------------------------------------------------------------------------- summary
 
 
-def summarize(config: SimConfig) -> str:
-    """One paragraph describing what a configuration sets up (for ``simmer check``)."""
+def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True) -> str:
+    """One paragraph describing what a configuration sets up (for ``simmer check`` and the
+    start of ``simmer run``): the noise as configured, with ``seed`` (default: the
+    configuration's), and the two-port scheme's ports unless ``ports`` is False (a run says the
+    ports it actually serves on its own lines)."""
     s = config.settings
     rows, cols = len(s.walls), len(s.walls[0])
     length = s.wall_segment_length
@@ -160,16 +182,7 @@ def summarize(config: SimConfig) -> str:
         + (f" ({', '.join(groups[g])})" if groups[g] else "")
         for g in DEVICE_GROUPS
     ]
-    noise = (
-        "fresh random noise each run"
-        if s.rand_error
-        else (f"repeatable noise (seed {s.seed if s.seed is not None else s.floor_seed})")
-    )
-    bias = (
-        f"drive biases drawn at start (strength {list(s.bias_strength)})"
-        if s.rand_bias
-        else "drive biases as configured"
-    )
+    served = f"; SimMeR TCP on {s.host}:{s.port_rx}/{s.port_tx}" if ports else ""
     return (
         f"Maze of {cols} x {rows} cells of {length:g} in "
         f"({cols * length:g} x {rows * length:g} in), "
@@ -177,9 +190,42 @@ def summarize(config: SimConfig) -> str:
         f"Block of {s.block_size:g} in at {list(s.block_position)}. "
         f"Robot starting at {list(s.robot_start_position)} heading {s.robot_start_rotation:g} deg "
         f"with {', '.join(parts)}. "
-        f"Noise: {noise}; {bias}. {s.frame_rate:g} steps/s; SimMeR TCP on "
-        f"{s.host}:{s.port_rx}/{s.port_tx}, replies {describe_replies(s)}."
+        f"Noise: {describe_noise(config, seed)}. {s.frame_rate:g} steps/s{served}, replies "
+        f"{describe_replies(s)}."
     )
+
+
+def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
+    """The devices with noise switched on, and which of their settings (``error``, ``bias``)
+    are not zero; drive biases drawn at start (``rand_bias``) count as each drive's bias."""
+    settings = config.settings
+    drawn = settings.rand_bias and any(settings.bias_strength)
+    found: dict[str, list[str]] = {}
+    for spec in config.devices:
+        for name in ("error", "bias"):
+            value = getattr(spec.params, name, 0.0)
+            values = value.model_dump().values() if isinstance(value, BaseModel) else [value]
+            if any(v != 0 for v in values) or (drawn and name == "bias" and spec.group == "drives"):
+                found.setdefault(spec.id, []).append(name)
+    return found
+
+
+def describe_noise(config: SimConfig, seed: int | None = None) -> str:
+    """``none (every error and bias is 0)``, or which devices are noisy and the seed."""
+    noisy = noisy_devices(config)
+    if not noisy:
+        return "none (every error and bias is 0)"
+    s = config.settings
+    devices = ", ".join(f"{device} {' and '.join(names)}" for device, names in noisy.items())
+    if s.rand_error:
+        draw = "fresh each run" + (f" (this run's: seed {seed})" if seed is not None else "")
+    else:
+        configured = s.floor_seed if s.seed is None else s.seed
+        draw = f"repeatable, seed {configured if seed is None else seed}"
+    drawn = (
+        f"; drive biases drawn at start (strength {list(s.bias_strength)})" if s.rand_bias else ""
+    )
+    return f"{devices}; {draw}{drawn}"
 
 
 def describe_replies(settings: Settings) -> str:

@@ -14,8 +14,8 @@ The table name is the device id. Motors default to ``type = "motor"``, drives to
 from __future__ import annotations
 
 import codecs
-from dataclasses import dataclass, replace
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Literal
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
@@ -104,6 +104,14 @@ class Settings(BaseModel):
         le=MAX_TIMEOUT,
         description="Seconds (at most a day) a serial reply, a connection that has not sent a "
         "whole message, or an uncollected two-port reply may wait before it is given up.",
+    )
+    idle_timeout: float = Field(
+        3600.0,
+        gt=0,
+        le=MAX_TIMEOUT,
+        description="Seconds (at most a day) a persistent connection may stay open between "
+        "messages before it is closed (a program sitting at a prompt keeps its connection "
+        "for an hour).",
     )
     str_encoding: str = Field("utf-8", description="Text encoding of commands.")
     # Block
@@ -248,11 +256,6 @@ class SimConfig:
     origin: str = ""
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
-
-    def with_settings(self, **updates: Any) -> SimConfig:
-        """The same configuration with some settings replaced (validated), e.g. from the CLI."""
-        settings = Settings.model_validate({**self.settings.model_dump(), **updates})
-        return replace(self, settings=settings)
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""

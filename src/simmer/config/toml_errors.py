@@ -5,6 +5,9 @@ that the key was already set on line 41, which is what a student sees after unco
 line beside the one it was meant to replace. So a key or table written twice is found again
 here, by a small scan of the file's statements, and both lines are named. Every other
 tomllib message is reworded, and its line always goes into :attr:`ConfigIssue.line`.
+
+The same scan gives the problems validation finds in a file that parses their lines
+(:func:`with_lines`): ``drives.w0.motors[1]: no motor 'm2'`` points at the ``motors`` line.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from __future__ import annotations
 import re
 import tomllib
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from simmer.errors import ConfigIssue
@@ -63,6 +66,39 @@ def toml_issue(exc: tomllib.TOMLDecodeError, text: str) -> ConfigIssue:
         plain = _PLAIN.get(what, what[:1].lower() + what[1:])
     where = f"line {line}, column {column}" if column else f"line {line}"
     return ConfigIssue("", f"not valid TOML at {where}: {plain}", line)
+
+
+def with_lines(issues: list[ConfigIssue], text: str) -> list[ConfigIssue]:
+    """``issues`` with the line of each key found in ``text`` (the key's own line; for a key
+    not written there, its table's header), in the order of the file."""
+    lines = key_lines(text)
+    placed = [
+        issue if issue.line is not None else replace(issue, line=_line_of(lines, issue.key))
+        for issue in issues
+    ]
+    return sorted(placed, key=lambda issue: issue.line if issue.line is not None else 1 << 62)
+
+
+def key_lines(text: str) -> dict[tuple[str, ...], int]:
+    """The first line of every key and table header written in ``text`` (what the scan
+    follows; nothing for a file it cannot)."""
+    lines: dict[tuple[str, ...], int] = {}
+    try:
+        for statement in _statements(text):
+            for end in range(1, len(statement.path) + 1):  # a dotted key's tables too
+                lines.setdefault(statement.path[:end], statement.first)
+    except ValueError:
+        return {}
+    return lines
+
+
+def _line_of(lines: dict[tuple[str, ...], int], key: str) -> int | None:
+    """The line of ``key`` (``drives.w0.motors[1]``), or of the nearest table holding it."""
+    path = tuple(re.sub(r"\[\d+\]", "", key).split("."))
+    for end in range(len(path), 0, -1):
+        if path[:end] in lines:
+            return lines[path[:end]]
+    return None
 
 
 # ----------------------------------------------------------------------------- the scan

@@ -20,7 +20,7 @@ import importlib
 import math
 import reprlib
 import traceback
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, get_args
 
@@ -88,7 +88,7 @@ def config_from_dict(
         for group, table in groups.items()
     }
     devices = _validate_devices(groups, declared, found, base_dir)
-    issues += _check_drive_motors(devices, declared["motors"])
+    issues += _check_drive_motors(devices, groups["drives"], declared["motors"])
     if settings is not None:
         maze_issues = [] if oversize else _check_walls(settings) or _check_sizes(settings)
         issues += maze_issues + _check_references(settings, declared)
@@ -98,6 +98,33 @@ def config_from_dict(
         raise ConfigError(source, issues)
     assert settings is not None
     return SimConfig(settings, tuple(devices), source, tuple(found.warnings))
+
+
+def with_settings(
+    config: SimConfig, updates: dict[str, Any], source: str | None = None
+) -> SimConfig:
+    """``config`` with some settings replaced (the command line's ``--port-rx`` ...), checked
+    by the same model and cross-checks as a file's settings, so that two equal ports are refused
+    before any port opens: the one route for changing a loaded configuration's settings. Every
+    problem is in a :class:`ConfigError` naming ``source`` (default: the configuration's)."""
+    source = source or config.source
+    try:
+        settings = Settings.model_validate({**config.settings.model_dump(), **updates})
+    except ValidationError as exc:
+        raise ConfigError(source, _issues_from_validation(exc, "", Settings)) from None
+    declared: dict[str, list[str]] = {
+        group: [spec.id for spec in config.devices if spec.group == group]
+        for group in DEVICE_GROUPS
+    }
+    found = _Found(original=bool(config.origin))  # its warnings were said when it was loaded
+    issues = found.errors
+    issues += _check_walls(settings) or _check_sizes(settings)
+    issues += _check_references(settings, declared)
+    if not issues:
+        _check_placement(settings, found)
+    if issues:
+        raise ConfigError(source, issues)
+    return replace(config, settings=settings)
 
 
 @dataclass
@@ -200,7 +227,13 @@ def _validate_devices(
                 continue
             id_problem = _id_problem(device_id)
             if id_problem:
-                issues.append(ConfigIssue(key, id_problem))
+                found.strict(
+                    key,
+                    id_problem,
+                    f"device id {device_id!r} is not two ASCII characters, so no command can "
+                    "reach it: a command names a device by its first two characters, and the "
+                    "original answered 'Not Found' (v1.2) or NaN; rename it (like 'u1') to use it",
+                )
             if device_id in seen:
                 issues.append(
                     ConfigIssue(
@@ -315,6 +348,18 @@ def _validate_device(
         params = kind.Params.model_validate(raw, context={"base_dir": base_dir})
     except ValidationError as exc:
         issues += _issues_from_validation(exc, key, kind.Params)
+        errors = exc.errors()
+        unknown = {
+            e["loc"][0] for e in errors if e["type"] == "extra_forbidden" and len(e["loc"]) == 1
+        }
+        if len(unknown) < len(errors):
+            return None
+        try:  # only unknown keys: the rest may hold mistakes they must not hide
+            known = {name: value for name, value in raw.items() if name not in unknown}
+            params = kind.Params.model_validate(known, context={"base_dir": base_dir})
+        except ValidationError:
+            return None
+        issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in params.problems()]
         return None
     problems = params.problems()
     issues += [ConfigIssue(f"{key}.{sub}", message) for sub, message in problems]
@@ -434,20 +479,30 @@ def _check_sizes(settings: Settings) -> list[ConfigIssue]:
     return issues
 
 
-def _check_drive_motors(devices: list[DeviceSpec], motor_ids: list[str]) -> list[ConfigIssue]:
+def _check_drive_motors(
+    devices: list[DeviceSpec], drives: Any, motor_ids: list[str]
+) -> list[ConfigIssue]:
     """Every motor a drive names must be declared (a declared but invalid one is reported
-    where it is declared, not again here)."""
+    where it is declared, not again here). A drive with other mistakes is checked from its
+    table as written, so that one mistake does not hide another."""
+    named = {
+        spec.id: list(getattr(spec.params, "motors", ()))
+        for spec in devices
+        if spec.group == "drives"
+    }
+    valid = {spec.id for spec in devices}
+    for device_id, raw in (drives if isinstance(drives, dict) else {}).items():
+        if device_id not in valid and isinstance(raw, dict) and isinstance(raw.get("motors"), list):
+            named[device_id] = raw["motors"]
     issues = []
-    for spec in devices:
-        if spec.group != "drives":
-            continue
-        for i, motor in enumerate(getattr(spec.params, "motors", ())):
-            if motor not in motor_ids:
+    for drive_id, motors in named.items():
+        for i, motor in enumerate(motors):
+            if isinstance(motor, str) and motor not in motor_ids:
                 hint = _did_you_mean(motor, motor_ids)
                 known = ", ".join(motor_ids) or "none"
                 issues.append(
                     ConfigIssue(
-                        f"drives.{spec.id}.motors[{i}]",
+                        f"drives.{drive_id}.motors[{i}]",
                         f"no motor {motor!r}{hint}; the motors are: {known}",
                     )
                 )

@@ -51,22 +51,31 @@ EXIT_TIMEOUT = 124
 
 
 def program_environment(
-    ports: Mapping[str, int], host: str = "127.0.0.1", base: Mapping[str, str] | None = None
+    ports: Mapping[str, int],
+    host: str = "127.0.0.1",
+    base: Mapping[str, str] | None = None,
+    configured: Mapping[str, int] | None = None,
 ) -> dict[str, str]:
     """The environment a lockstep program runs in: the shim on its path, this run's ports.
 
-    ``ports`` maps ``port_rx``, ``port_tx`` and ``stream`` to the ports this run serves on.
-    ``simmer.client`` reads ``SIMMER_HOST``, ``SIMMER_PORT``, ``SIMMER_PORT_RX`` and
-    ``SIMMER_PORT_TX``; the shim reads ``SIMMER_LOCKSTEP`` and ``SIMMER_PORT_MAP``.
+    ``ports`` maps ``port_rx``, ``port_tx`` and ``stream`` to the ports this run serves on;
+    connections to SimMeR's standard ports, and to the ports the configuration names
+    (``configured``, same keys), are sent there. ``simmer.client`` reads ``SIMMER_HOST``,
+    ``SIMMER_PORT``, ``SIMMER_PORT_RX`` and ``SIMMER_PORT_TX``; the shim reads
+    ``SIMMER_LOCKSTEP``, ``SIMMER_PORT_MAP``, ``SIMMER_MESSAGE_PORTS`` and
+    ``SIMMER_REPLY_PORTS``.
     """
     env = dict(os.environ if base is None else base)
     path = env.get("PYTHONPATH")
     env["PYTHONPATH"] = str(SHIM) + (os.pathsep + path if path else "")
     env["SIMMER_LOCKSTEP"] = f"{host}:{ports['stream']}"
     env["SIMMER_EPOCH"] = repr(time.time())
-    env["SIMMER_PORT_MAP"] = ",".join(
-        f"{STANDARD_PORTS[name]}={port}" for name, port in ports.items()
-    )
+    redirected = {STANDARD_PORTS[name]: port for name, port in ports.items()}
+    for name, port in (configured or {}).items():
+        redirected.setdefault(port, ports[name])
+    env["SIMMER_PORT_MAP"] = ",".join(f"{old}={new}" for old, new in redirected.items())
+    env["SIMMER_MESSAGE_PORTS"] = f"{ports['port_rx']},{ports['stream']}"
+    env["SIMMER_REPLY_PORTS"] = str(ports["port_tx"])
     env["SIMMER_HOST"] = host
     env["SIMMER_PORT"] = str(ports["stream"])
     env["SIMMER_PORT_RX"] = str(ports["port_rx"])
@@ -85,6 +94,29 @@ def split_command(command: str | Sequence[str]) -> list[str]:
     if args[0] in ("python", "python3"):
         args[0] = sys.executable
     return args
+
+
+def runs_python(command: str | Sequence[str]) -> bool:
+    """Whether ``command`` starts a Python program (which the shim puts on the simulated
+    clock): a Python interpreter, a ``.py`` file, or a script whose ``#!`` line names Python."""
+    args = split_command(command)
+    name = Path(args[0]).name.lower()
+    if name.startswith(("python", "pypy")) or name in ("py", "py.exe") or name.endswith(".py"):
+        return True
+    try:
+        with open(args[0], "rb") as file:
+            return b"python" in file.readline(200)
+    except OSError:
+        return False
+
+
+NOT_PYTHON = (
+    "note: {command!r} does not look like a Python program, so SimMeR cannot put its sleeps on "
+    "the simulated clock: the clock advances only by its messages (one step each) and by the "
+    "clock messages it sends. To make its runs repeatable, see 'Clock messages' in "
+    "docs/protocol.md."
+)
+"""What ``simmer run --program`` says for a program :func:`runs_python` does not recognise."""
 
 
 @dataclass

@@ -400,11 +400,17 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
         f"| Collisions | {collisions}; {outcome['blocked_steps']} steps blocked |",
         f"| Path length | {outcome['path_length']:.1f} in |",
         f"| Messages, commands | {outcome['messages']}, {outcome['commands']} |",
-        f"| NaN replies | {outcome['nan_replies']} |",
+        f"| Busy replies (a drive still moving), NaN replies | "
+        f"{outcome.get('busy_replies', 0)}, {outcome['nan_replies']} |",
         f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
         f"| Length of the run | {report['duration']:.2f} s ({report['steps']} steps), "
         f"{report['wall_seconds']:.1f} s of wall-clock time |",
         f"| How it ended | {ended} |",
+        "",
+        "Reached the block: the robot's outline came within 1 in of the block's. The Task 2 "
+        "time runs from the robot's first motion until then. A busy reply is a drive command "
+        "refused while a drive was moving; a NaN reply, a command that could not be carried "
+        "out (malformed, or an unknown device).",
         "",
     ]
     if report.get("recording_stopped"):

@@ -94,6 +94,7 @@ class CommandBus:
         self._lock = threading.Lock()
         self._timer_lock = threading.Lock()
         self._closed = False
+        self._taken = 0
         self._clients: dict[str, str] = {}
         self._selector = selectors.DefaultSelector()
         self._watch_lock = threading.RLock()
@@ -139,6 +140,23 @@ class CommandBus:
         """Interrupt the loop's wait (caller holds ``_lock`` and the bus is open)."""
         with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
             os.write(self._wake_w, b"\0")
+
+    def took(self, size: int, *, wake: bool = False) -> None:
+        """Count ``size`` bytes of a program's messages as taken: answered by the loop, or
+        read and set aside by a transport (text outside frames, a ``?`` line). The lockstep
+        clock waits on this count (see :func:`simmer.protocol.parse_clock`). A thread other
+        than the loop's passes ``wake``: the loop may be waiting for the count."""
+        if size <= 0:
+            return
+        with self._lock:
+            self._taken += size
+            if wake and not self._closed:
+                self._wake()
+
+    @property
+    def taken(self) -> int:
+        """Bytes of messages taken so far (see :meth:`took`)."""
+        return self._taken
 
     @property
     def queued(self) -> int:

@@ -12,7 +12,7 @@ from simmer.ports import STREAM_PORT
 from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
-from simmer.transport.tcp import StreamServer, TwoPortServer
+from simmer.transport.tcp import GRACE, StreamServer, TwoPortServer
 
 log = logging.getLogger("simmer.transport")
 
@@ -42,7 +42,8 @@ def reply_codec(config: SimConfig) -> ReplyCodec:
 
 
 class Link:
-    """The two-port server, the stream server and (optionally) the virtual serial port."""
+    """The two-port server, the stream server and (optionally) the virtual serial port;
+    ``lockstep``: served on the lockstep clock (no wall-clock grace anywhere)."""
 
     def __init__(
         self,
@@ -55,6 +56,7 @@ class Link:
         stream_port: int = STREAM_PORT,
         serial: bool = False,
         serial_link: str | Path | None = None,
+        lockstep: bool = False,
     ) -> None:
         settings = config.settings
         self.host = host if host is not None else settings.host
@@ -71,6 +73,7 @@ class Link:
             settings.port_tx if port_tx is None else port_tx,
             codec=codec,
             timeout=settings.timeout,
+            grace=0.0 if lockstep else GRACE,
         )
         self.serial: SerialServer | None = None
         try:
@@ -81,6 +84,7 @@ class Link:
                 width=settings.reply_bytes,
                 encoding=settings.str_encoding,
                 timeout=settings.timeout,
+                idle_timeout=settings.idle_timeout,
             )
             if serial or serial_link is not None:
                 self.serial = SerialServer(bus, serial_link, codec=codec, timeout=settings.timeout)

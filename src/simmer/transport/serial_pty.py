@@ -21,6 +21,7 @@ import select
 import threading
 import time
 import tty
+from dataclasses import replace
 from pathlib import Path
 
 from simmer.errors import SimmerError
@@ -113,7 +114,7 @@ class SerialServer:
                 if self._wake_r in readable:
                     return
                 if not readable:  # 50 ms of silence: what we have is a command
-                    self._answer(bytes(buffer))
+                    self._answer(bytes(buffer), len(buffer))
                     buffer.clear()
                     continue
                 try:
@@ -123,7 +124,7 @@ class SerialServer:
                 last = time.monotonic()
                 self._split(buffer)
                 if len(buffer) > MAX_MESSAGE_BYTES:
-                    self._answer(bytes(buffer))
+                    self._answer(bytes(buffer), len(buffer))
                     buffer.clear()
         except (BusClosed, OSError) as exc:
             if not self._stopping.is_set():
@@ -135,23 +136,26 @@ class SerialServer:
             while (end := buffer.find(b"\n")) >= 0:
                 line = bytes(buffer[:end])
                 del buffer[: end + 1]
-                self._answer(line)
+                self._answer(line, end + 1)
             return
         start, stop = self._frame
         while (end := buffer.find(stop)) >= 0:
             message = bytes(buffer[: end + len(stop)])
             del buffer[: end + len(stop)]
-            self._answer(message)
+            self._answer(message, len(message))
         if start not in buffer:
+            self.bus.took(len(buffer), wake=True)
             buffer.clear()  # text outside frames (line endings, say) is ignored
 
-    def _answer(self, data: bytes) -> None:
-        """Answer one message; a failure is logged (the first in full) and serving goes on.
-        Only the port closing or the loop stopping ends the thread."""
+    def _answer(self, data: bytes, size: int) -> None:
+        """Answer one message, read from ``size`` bytes of the port; a failure is logged (the
+        first in full) and serving goes on. Only the port closing or the loop stopping ends
+        the thread."""
         try:
-            decoded = self.codec.decode(data)
+            decoded = replace(self.codec.decode(data), size=size)
             if decoded.text is None and decoded.count == 0:
                 log.warning("%s: %s", self.client, decoded.error)
+                self.bus.took(size, wake=True)
                 return
             replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
             self._write(self.codec.encode(decoded, replies))

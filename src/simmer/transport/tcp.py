@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import itertools
 import logging
 import math
@@ -44,10 +45,12 @@ from simmer.protocol import (
     MAX_MESSAGE_BYTES,
     Decoded,
     PackedCodec,
+    Replies,
     ReplyCodec,
     decode_message,
     frame_replies,
     frame_text,
+    printable,
 )
 from simmer.transport.bus import BusClosed, CommandBus, Request
 
@@ -70,6 +73,10 @@ ACCEPT_BACKOFF = 0.5
 """Seconds a listener is not watched after accepting failed for lack of descriptors (or
 anything unexpected): retrying at once would spin the loop, and the connections already open are
 served meanwhile; half a second is short beside a client's connect timeout."""
+GRACE = 1 / 60
+"""Seconds a two-port reply connection with nothing to collect waits for a message whose
+connection was accepted before it and is still arriving (one step at 60 Hz), before it is
+closed empty as the original closed it; 0 under the lockstep clock."""
 _OUT_OF_RESOURCES = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
 
 
@@ -202,10 +209,17 @@ class _Server:
     kind = "tcp"
 
     def __init__(
-        self, bus: CommandBus, host: str, ports: list[int], timeout: float = 300.0
+        self,
+        bus: CommandBus,
+        host: str,
+        ports: list[int],
+        timeout: float = 300.0,
+        idle_timeout: float | None = None,
     ) -> None:
         self.bus = bus
         self.timeout = timeout
+        self.idle_timeout = idle_timeout
+        """Seconds a connection may sit between messages (None: no limit)."""
         self.order = itertools.count()
         self._lock = threading.Lock()
         self._connections: set[_Connection] = set()
@@ -298,8 +312,10 @@ class _Server:
             self._watch_listener(index)
 
     def _sweep_interval(self) -> float:
-        """Seconds between idle sweeps: a quarter of the timeout, within 0.05 s and 1 s."""
-        return min(1.0, max(0.05, self.timeout / 4))
+        """Seconds between idle sweeps: a quarter of the shorter timeout, within 0.01 s and
+        1 s."""
+        shortest = min(self.timeout, self.idle_timeout or self.timeout)
+        return min(1.0, max(0.01, shortest / 4))
 
     def _sweep(self) -> None:
         """Loop thread, every second or so: close connections past their deadline."""
@@ -314,12 +330,14 @@ class _Server:
             for connection in late:
                 connection.close()
             if late:
+                idle = f" or {self.idle_timeout:g} s between messages" if self.idle_timeout else ""
                 log.info(
-                    "%s: closed %d connection(s) idle for %g s with no complete message "
-                    "(or no reply to collect): %s",
+                    "%s: closed %d connection(s) that waited too long: %g s for a whole "
+                    "message (or a reply to collect; the timeout setting)%s (idle_timeout): %s",
                     self.kind,
                     len(late),
                     self.timeout,
+                    idle,
                     ", ".join(c.client for c in late[:3]) + (", ..." if len(late) > 3 else ""),
                 )
             self.swept(now)
@@ -371,29 +389,36 @@ class _Pending:
         self.order = order
         self.arrived = time.monotonic()
 
+    def replies(self) -> Replies | None:
+        """What was asked and answered (None if answering failed: the simulation stopped)."""
+        if self.future.exception() is not None:
+            return None
+        return self.decoded, self.future.result()
+
 
 class TwoPortServer(_Server):
     """SimMeR's scheme: a message arrives on ``port_rx`` (everything until the client closes);
-    its reply leaves on a connection to ``port_tx`` once it is ready, then that connection is
-    closed. ``codec`` decides the bytes both ways: packed floats (SimMeR v1.0/v1.1) or SimMeR
-    v1.2's framed text, whose message with no complete frame gets its reply connection closed
-    with nothing sent, as the original did.
+    a connection to ``port_tx`` collects replies, then is closed. ``codec`` decides the bytes
+    both ways (packed floats, SimMeR v1.0/v1.1; or v1.2's framed text, whose message with no
+    complete frame gets nothing back) and what a reply connection collects, as the original
+    of that version did (BEHAVIOUR §6.4, docs/protocol.md):
 
-    Nothing in the scheme says which reply is whose: replies are paired with reply connections
-    by order, oldest with oldest. Two rules keep a stray connection from putting that out of
-    step for good:
+    * v1.2 (``codec.keeps == "all"``): every reply waiting, in one frame;
+    * v1.0/v1.1 (``"first"``): the first reply waiting; a reply that comes while another
+      waits is dropped (logged), as the original's one-reply transmit buffer dropped it;
+    * nothing waiting: the connection is closed at once with nothing sent.
 
-    * a reply connection claims only replies to messages whose connection was accepted before
-      it (every waiting ``port_rx`` connection is accepted first, so a client's own message
-      always counts). A connection to ``port_tx`` already open when a message's connection
-      comes, idle or stray, therefore never takes that message's reply; it is closed after
-      ``timeout`` s;
-    * a reply nobody collects is dropped after ``timeout`` s, and past :data:`MAX_UNCLAIMED`
-      the oldest goes, so memory stays bounded.
-
-    A reply connection that hangs up before its reply is sent does not consume it: the next one
-    gets it. What no rule can fix: a client killed after sending leaves a reply that the next
-    client's reply connection takes (until it expires), as in the original."""
+    Better than the originals, a reply connection waits for the replies still being computed
+    to messages whose connection was accepted before its own (every waiting ``port_rx``
+    connection is accepted first, so a client's own message always counts), and, with nothing
+    else to collect, up to ``grace`` s for such a message still arriving: a client that reads
+    at once loses nothing. Under the lockstep clock ``grace`` is 0 (the program's messages are
+    all taken before its reply connection opens), so timing never decides. A reply
+    connection never takes the reply to a message accepted after it. Reply connections are
+    served in the order they came. Replies nobody collects are dropped after ``timeout`` s,
+    and past :data:`MAX_UNCLAIMED` the oldest goes, so memory stays bounded. A reply
+    connection that
+    hangs up before its replies are sent does not consume them: the next one gets them."""
 
     kind = "two-port"
 
@@ -406,12 +431,15 @@ class TwoPortServer(_Server):
         *,
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
+        grace: float = GRACE,
     ) -> None:
         super().__init__(bus, host, [port_rx, port_tx], timeout)
         self.port_rx, self.port_tx = self.ports
         self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
-        self.unclaimed: deque[_Pending] = deque()  # replies nobody has asked for yet
-        self.waiting: deque[_ReplyConnection] = deque()  # reply connections with no reply yet
+        self.grace = grace
+        self.pending: deque[_Pending] = deque()  # replies (or their futures) nobody collected
+        self.receiving: set[_MessageConnection] = set()  # message connections still sending
+        self.waiting: deque[_ReplyConnection] = deque()  # reply connections, oldest first
         self.dropped = 0  # replies dropped since the last sweep (logged there)
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
@@ -430,33 +458,54 @@ class TwoPortServer(_Server):
 
     def arrived(self, decoded: Decoded, order: int, client: str) -> None:
         """Loop thread: a whole message came in; execute it and hold its reply."""
-        future = self.bus.submit(decoded, client)
-        self.unclaimed.append(_Pending(decoded, future, order))
-        while len(self.unclaimed) > MAX_UNCLAIMED:
-            self.unclaimed.popleft()
+        pending = _Pending(decoded, self.bus.submit(decoded, client), order)
+        self.pending.append(pending)
+        while len(self.pending) > MAX_UNCLAIMED:
+            self.pending.popleft()
             self.dropped += 1
-        self.match()
+        pending.future.add_done_callback(lambda _future: self._answered(pending))
 
-    def match(self) -> None:
-        """Loop thread: give each waiting reply connection, oldest first, the oldest unclaimed
-        reply to a message accepted before it."""
-        first = min((p.order for p in self.unclaimed), default=None)
-        for waiting in list(self.waiting):
-            if first is None:
-                return
-            if waiting.order < first or waiting.closed or waiting not in self.waiting:
-                continue  # opened before any of these messages (see the class doc), or gone
-            reply = next(p for p in self.unclaimed if p.order < waiting.order)
-            self.unclaimed.remove(reply)
-            self.waiting.remove(waiting)
-            waiting.claim(reply)
-            first = min((p.order for p in self.unclaimed), default=None)
+    def _answered(self, pending: _Pending) -> None:
+        """Loop thread (or a closing bus): a reply is ready. v1.0/v1.1 drop it if an earlier
+        one still waits; then whoever can collect does."""
+        if self.codec.keeps == "first" and pending in self.pending:
+            earlier = itertools.takewhile(lambda p: p is not pending, self.pending)
+            if any(p.future.done() for p in earlier):
+                self.pending.remove(pending)
+                log.info(
+                    "two-port: the reply to %r is dropped: an earlier reply is still waiting "
+                    "to be collected, and SimMeR v1.0/v1.1 kept only one",
+                    printable(pending.decoded.text or "?"),
+                )
+        self.collect()
+
+    def collect(self) -> None:
+        """Loop thread: serve the waiting reply connections, oldest first, with what each
+        collects (see the class doc); stop at one that must wait."""
+        while self.waiting:
+            reply = self.waiting[0]
+            earlier = [p for p in self.pending if p.order < reply.order]
+            if any(not p.future.done() for p in earlier):
+                return  # answered soon: collected then
+            if not earlier and any(m.order < reply.order for m in self.receiving):
+                late = reply.opened_at + self.grace - time.monotonic()
+                if late > 0:  # a message still arriving: wait for it, a moment
+                    self.bus.call_later(late, self.collect)
+                    return
+            self.waiting.popleft()
+            if self.codec.keeps == "first":
+                earlier = earlier[:1]
+            for p in earlier:
+                self.pending.remove(p)
+            reply.guard(functools.partial(reply.deliver, earlier))
 
     def swept(self, now: float) -> None:
         """Drop replies older than ``timeout``; log what was dropped since the last sweep."""
-        kept = deque(p for p in self.unclaimed if now - p.arrived < self.timeout)
-        dropped = self.dropped + len(self.unclaimed) - len(kept)
-        self.unclaimed, self.dropped = kept, 0
+        kept = deque(
+            p for p in self.pending if not p.future.done() or now - p.arrived < self.timeout
+        )
+        dropped = self.dropped + len(self.pending) - len(kept)
+        self.pending, self.dropped = kept, 0
         if dropped:
             log.warning(
                 "two-port: dropped %d repl%s nobody collected (kept %g s, at most %d); replies "
@@ -476,46 +525,57 @@ class _MessageConnection(_Connection):
         self.two_port = server
         self.data = bytearray()
 
+    def opened(self) -> None:
+        """A reply connection accepted after this one waits for its message."""
+        self.two_port.receiving.add(self)
+
     def received(self, chunk: bytes) -> None:
         """Collect; at the end (or past the size limit) submit the message and close."""
         self.data += chunk
         if chunk and len(self.data) <= MAX_MESSAGE_BYTES:
             return
-        self.close()
-        if not self.data:
+        if self.data:
+            decoded = replace(self.two_port.codec.decode(bytes(self.data)), size=len(self.data))
+            self.two_port.arrived(decoded, self.order, self.client)
+        else:
             log.debug("%s connected and sent nothing: no message", self.client)
+        self.close()
+
+    def close(self) -> None:
+        """Close; a reply connection waiting for this message may now collect."""
+        if self.closed:
             return
-        decoded = self.two_port.codec.decode(bytes(self.data))
-        self.two_port.arrived(decoded, self.order, self.client)
+        super().close()
+        self.two_port.receiving.discard(self)
+        if not self.server.bus.closed:
+            self.two_port.collect()
 
 
 class _ReplyConnection(_Connection):
-    """Two-port ``port_tx``: wait for a reply, send it, close."""
+    """Two-port ``port_tx``: collect the replies waiting (see :class:`TwoPortServer`), send
+    them, close."""
 
     def __init__(self, server: TwoPortServer, conn: socket.socket, client: str) -> None:
         super().__init__(server, conn, client)
         self.two_port = server
-        self.reply: _Pending | None = None
+        self.collected: list[_Pending] = []
+        self.opened_at = time.monotonic()
 
     def opened(self) -> None:
-        """Queue up for the next reply."""
+        """Queue up for the replies waiting."""
         self.two_port.waiting.append(self)
-        self.two_port.match()
+        self.two_port.collect()
 
-    def claim(self, reply: _Pending) -> None:
-        """This connection will carry ``reply`` once it is ready."""
-        self.reply = reply
-        reply.future.add_done_callback(lambda _future: self.guard(lambda: self.ready(reply)))
-
-    def ready(self, reply: _Pending) -> None:
-        """The reply exists (loop thread): send it and close."""
-        if reply is not self.reply or self.closed:
-            return
-        if reply.future.exception() is not None:
-            self.close()
-            return
+    def deliver(self, collected: list[_Pending]) -> None:
+        """Send ``collected`` as one packet and close (at once if there is nothing to send)."""
+        self.collected = collected
+        answered = [r for p in collected if (r := p.replies()) is not None]
+        data = self.two_port.codec.encode_many(answered)
         self.close_when_sent = True
-        self.send(self.two_port.codec.encode(reply.decoded, reply.future.result()))
+        if data:
+            self.send(data)
+        else:
+            self.close()
 
     def received(self, chunk: bytes) -> None:
         """Stray bytes are ignored; end of stream means the client left."""
@@ -523,18 +583,20 @@ class _ReplyConnection(_Connection):
             self.close()
 
     def close(self) -> None:
-        """Close; an unsent reply goes back to the front of the queue for the next reader."""
+        """Close; replies not sent go back, in order, for the next reply connection."""
         if self.closed:
             return
-        reply, self.reply = self.reply, None
-        unsent = reply is not None and not (self.close_when_sent and not self.outbox)
+        unsent = self.collected and not (self.close_when_sent and not self.outbox)
         super().close()
-        if self in self.two_port.waiting:
-            self.two_port.waiting.remove(self)
-        if unsent and reply is not None and not self.server.bus.closed:
+        two_port = self.two_port
+        if self in two_port.waiting:
+            two_port.waiting.remove(self)
+        if unsent and not self.server.bus.closed:
             log.info("%s left before its reply was sent; kept for the next one", self.client)
-            self.two_port.unclaimed.appendleft(reply)
-            self.two_port.match()
+            two_port.pending = deque(
+                sorted([*self.collected, *two_port.pending], key=lambda p: p.order)
+            )
+            two_port.collect()
 
 
 class StreamServer(_Server):
@@ -553,8 +615,9 @@ class StreamServer(_Server):
         width: int = 4,
         encoding: str = "utf-8",
         timeout: float = 300.0,
+        idle_timeout: float = 3600.0,
     ) -> None:
-        super().__init__(bus, host, [port], timeout)
+        super().__init__(bus, host, [port], timeout, idle_timeout)
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -588,6 +651,7 @@ class _StreamConnection(_Connection):
         self.latest: Future[list[float]] | None = None  # the last message submitted
         self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
         self.messages = 0
+        self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
         self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
 
     def reading(self) -> bool:
@@ -618,7 +682,7 @@ class _StreamConnection(_Connection):
                 self.searched = len(inbox)
                 if len(inbox) > MAX_MESSAGE_BYTES:
                     reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                    self.submit(Decoded(None, 1, reason, over_limit=True))
+                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)))
                     inbox.clear()
                 break
             line = bytes(inbox[:end])
@@ -626,27 +690,30 @@ class _StreamConnection(_Connection):
             self.searched = 0
             self.messages += 1
             if line.rstrip(b"\r") == EXPLAIN:
+                self.server.bus.took(end + 1)
                 self.explain_later()
             else:
                 decoded = decode_message(line, self.stream.encoding)
-                if line.startswith(CLOCK_PREFIX):
-                    decoded = replace(decoded, clock=True)
-                self.submit(decoded)
+                clock = line.startswith(CLOCK_PREFIX)
+                self.submit(replace(decoded, clock=clock, size=end + 1))
         self.rearm()
         self.update_events()
 
     def rearm(self) -> None:
-        """Set the idle deadline while the client owes a message: before its first one, or
-        with part of a line received; not between messages or while it waits for us."""
+        """Set the deadline while the client owes us something: ``timeout`` before its first
+        message or with part of a line received, ``idle_timeout`` between messages; none
+        while it waits for us."""
         if self.closed:
             return
-        owed = (not self.messages or self.inbox) and not (
-            self.ended or self.in_flight or self.outbox
-        )
-        if not owed:
+        if self.ended or self.in_flight or self.outbox:
             self.deadline = None
-        elif self.deadline is None:
-            self.deadline = time.monotonic() + self.server.timeout
+            return
+        owed = not self.messages or bool(self.inbox)
+        kind = "owed" if owed else "idle"
+        if self.deadline is None or kind != self.waiting_for:
+            limit = self.server.timeout if owed else self.server.idle_timeout
+            self.deadline = None if limit is None else time.monotonic() + limit
+        self.waiting_for = kind
 
     def submit(self, decoded: Decoded) -> None:
         """Queue one message; its frame is sent as soon as the loop has answered it."""

@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -119,6 +120,13 @@ class ToggleVideo:
 
 
 @dataclass(frozen=True)
+class Notice:
+    """Show this in the HUD for :data:`NOTICE_SECONDS` (the window saved a screenshot)."""
+
+    text: str
+
+
+@dataclass(frozen=True)
 class Quit:
     """Stop the simulation loop."""
 
@@ -132,8 +140,12 @@ Action = (
     | PlaceRobot
     | EndDrag
     | ToggleVideo
+    | Notice
     | Quit
 )
+NOTICE_SECONDS = 8.0
+"""Wall-clock seconds a notice stays in the HUD (wall time: it is for the person watching,
+and a paused simulation must not keep it forever)."""
 
 
 class Bridge:
@@ -157,6 +169,7 @@ class Bridge:
         self.video: VideoRecorder | None = None
         """The video being recorded from the window (key V), if one is."""
         self._fresh = threading.Event()
+        self._notice: tuple[str, float] | None = None  # text, monotonic time it goes
         self.latest: Snapshot = self.maker.snapshot(self.local)
         """The newest snapshot (replaced whole, never changed)."""
 
@@ -194,7 +207,7 @@ class Bridge:
             else:
                 self._apply(action, ctl)
         recording = self.video.path.name if self.video is not None else None
-        self.latest = self.maker.snapshot(ctl, self._ghost, recording)
+        self.latest = self.maker.snapshot(ctl, self._ghost, recording, self._notice_text())
         self._fresh.set()
         return keep_running
 
@@ -225,12 +238,27 @@ class Bridge:
                 self._start_video(action.path, ctl)
             else:
                 self._stop_video()
+        elif isinstance(action, Notice):
+            self._say(action.text)
+
+    def _say(self, text: str) -> None:
+        """Show ``text`` in the HUD for a while."""
+        self._notice = (text, time.monotonic() + NOTICE_SECONDS)
+
+    def _notice_text(self) -> str | None:
+        """The HUD's notice: the video being recorded, else the last notice for a while."""
+        if self.video is not None:
+            return f"recording the video {self.video.path} (V stops it)"
+        if self._notice is not None and time.monotonic() < self._notice[1]:
+            return self._notice[0]
+        return None
 
     def _start_video(self, path: Path, ctl: Controls) -> None:
         try:
             self.video = VideoRecorder(self.sim, path, controls=ctl)
         except (OSError, ValueError) as exc:
             log.error("cannot record a video into %s: %s", path, exc)
+            self._say(f"cannot record a video into {path}: {exc}")
         else:
             log.info("recording a video into %s (V stops it)", path)
 
@@ -242,8 +270,10 @@ class Bridge:
             video.close()
         except Exception as exc:  # the window goes on
             log.error("the video %s could not be written: %s", video.path, exc)
+            self._say(f"the video {video.path} could not be written: {exc}")
         else:
             log.info("saved the video %s (%.2f s)", video.path, video.seconds)
+            self._say(f"saved the video {video.path} ({video.seconds:.1f} s)")
 
     def close(self) -> None:
         """Finish a video being recorded and stop observing the simulation (once its thread

@@ -1,6 +1,6 @@
 """The heads-up display: heartbeat, key lights, time, the run's outcome (Task 2 stopwatch,
-collisions, path length, NaN replies), pose, commands, help, and a red warning for each device
-switched off because its code raised.
+collisions, path length, busy and NaN replies), pose, commands, help, the file a screenshot or
+video went to, and a red warning for each device switched off because its code raised.
 
 The outcome is the simulation's own :class:`~simmer.world.outcome.Outcome` (the figures a
 headless run prints); it and :class:`CommandLog` observe the simulation in its thread, and the
@@ -47,10 +47,13 @@ HELP = (
     ("T", "show / hide the path driven so far (videos show it)"),
     ("left-drag", "move the robot (refused onto a wall)"),
     ("right-drag", "turn the robot"),
-    ("V", "start / stop a video (simmer-*.mp4 here)"),
-    ("P", "screenshot (simmer-*.png here)"),
+    ("V", "start / stop a video (simmer-*.mp4, named above)"),
+    ("P", "screenshot (simmer-*.png, named above)"),
     ("H", "show / hide this help"),
     ("Esc", "quit (or close the window)"),
+    ("reached", "the robot's outline within 1 in of the block's"),
+    ("stopwatch", "Task 2: from the first motion until reached"),
+    ("busy", "a drive command refused while a drive moves"),
 )
 
 
@@ -210,9 +213,24 @@ def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
     if snap.switched_off:
         paint_switched_off(r, snap.switched_off, width)
-    if snap.recording is not None:  # the file's name is in the log
+    if snap.recording is not None:  # the file's name is in the notice
         r.draw_circle((18, 102), 5, ALARM)
         r.draw_text("REC", (28, 95), ALARM, 18)
+    if snap.notice is not None:
+        paint_notice(r, snap.notice, width)
+
+
+def paint_notice(r: Renderer, text: str, width: int | None = None) -> None:
+    """A box just under the panel, over the maze's top left, naming the file a screenshot or
+    video went to (cut to ``width`` if given)."""
+    size = 20
+    if width is not None:
+        fits = max(8, int((width - 40) / (LETTER * size)))
+        text = text if len(text) <= fits else "..." + text[-(fits - 3) :]  # keep the name
+    box = (10, PANEL_HEIGHT + 24, 20 + round(LETTER * size * len(text)), 28)
+    r.draw_rect(box, BOX)
+    r.draw_rect(box, LIT, 1)
+    r.draw_text(text, (20, PANEL_HEIGHT + 30), LIT, size)
 
 
 def stopwatch_text(outcome: OutcomeReport) -> tuple[str, Color]:
@@ -226,7 +244,7 @@ def stopwatch_text(outcome: OutcomeReport) -> tuple[str, Color]:
 
 def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
     """The run's outcome: Task 2 stopwatch, collisions (and when the first was), path length,
-    and how many replies were NaN."""
+    and how many replies were busy (a drive still moving) or NaN."""
     watch, color = stopwatch_text(outcome)
     r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22)
     collisions = str(outcome.collisions)
@@ -236,7 +254,10 @@ def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
     r.draw_text(f"{outcome.path_length:.1f} in", (PATH_X, ROWS[3]), TEXT, 22)
     replies = "reply" if outcome.commands == 1 else "replies"
     r.draw_text(
-        f"{outcome.commands} {replies}, {outcome.nan_replies} NaN", (REPLIES_X, ROWS[0]), TEXT, 20
+        f"{outcome.commands} {replies}: {outcome.busy_replies} busy, {outcome.nan_replies} NaN",
+        (REPLIES_X, ROWS[0]),
+        TEXT,
+        20,
     )
 
 
@@ -276,7 +297,7 @@ def paint_help(r: Renderer, size: tuple[int, int], keys: Sequence[tuple[str, str
     y0 = max(PANEL_HEIGHT, (size[1] - height) // 2)
     r.draw_rect((x0, y0, width, height), BOX)
     r.draw_rect((x0, y0, width, height), LIT, 2)
-    r.draw_text("Keys and mouse", (x0 + 16, y0 + 12), LIT, 24)
+    r.draw_text("Keys and mouse; what the display says", (x0 + 16, y0 + 12), LIT, 24)
     for i, (key, what) in enumerate(keys):
         y = y0 + 42 + 26 * i
         r.draw_text(key, (x0 + 16, y), LIT, 22)

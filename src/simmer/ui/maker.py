@@ -92,7 +92,11 @@ class SnapshotMaker:
         self._layout = RobotLayout.of(sim.robot)
 
     def snapshot(
-        self, ctl: Controls, ghost: FloatArray | None = None, recording: str | None = None
+        self,
+        ctl: Controls,
+        ghost: FloatArray | None = None,
+        recording: str | None = None,
+        notice: str | None = None,
     ) -> Snapshot:
         """The simulation now, with ``ctl``'s pause, speed and clients."""
         sim = self.sim
@@ -109,6 +113,7 @@ class SnapshotMaker:
             clients=ctl.clients,
             ghost=ghost,
             recording=recording,
+            notice=notice,
             trail=self.trail.view(),
         )
 

@@ -138,6 +138,9 @@ class Snapshot:
     """(device id, reason) of each device switched off because its code raised."""
     recording: str | None = None
     """The name of the video the window is recording, if it is."""
+    notice: str | None = None
+    """What the window just did that a student must find: the file a screenshot or video went
+    to (shown in the HUD for a few seconds)."""
     trail: TrailView | None = None
     """The path driven so far, if something keeps it."""
 
@@ -159,6 +162,7 @@ class Snapshot:
         clients: Sequence[str] | None = None,
         ghost: FloatArray | None = None,
         recording: str | None = None,
+        notice: str | None = None,
         trail: TrailView | None = None,
     ) -> Snapshot:
         """Read a simulation now (only in the thread that owns it)."""
@@ -183,5 +187,6 @@ class Snapshot:
             ghost=ghost,
             switched_off=tuple(sim.switched_off.items()),
             recording=recording,
+            notice=notice,
             trail=trail,
         )

@@ -36,6 +36,7 @@ from simmer.ui.bridge import (
     EndDrag,
     HoldKeys,
     LocalControls,
+    Notice,
     PlaceRobot,
     Quit,
     Reset,
@@ -224,7 +225,7 @@ class Window:
             # the path is used only if no video is being recorded
             post(ToggleVideo(new_file(self.save_dir, ".mp4")))
         elif key == pygame.K_p:
-            self.screenshot()
+            post(Notice(f"saved the screenshot {self.screenshot()}"))
         return True
 
     def screenshot(self) -> Path:

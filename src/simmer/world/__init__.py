@@ -1,20 +1,68 @@
-"""The simulated world: maze, block, robot and the simulation that steps them."""
+"""The simulated world: maze, block, robot and the simulation that steps them.
 
-from simmer.world.events import (
-    CollisionEndEvent,
-    CollisionEvent,
-    CommandEvent,
-    Event,
-    KeysEvent,
-    PlaceEvent,
-    ReachedEvent,
-    ResetEvent,
-    RunEvent,
-    StepEvent,
-)
-from simmer.world.maze import Block, Maze, floor_pattern
-from simmer.world.robot import Robot
-from simmer.world.simulation import Simulation
+The names below are imported on first use (PEP 562), so ``import simmer.world.events`` (the
+event types a recording or a light command reads) does not load NumPy and Numba.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_LAZY = {
+    "Block": "simmer.world.maze",
+    "Maze": "simmer.world.maze",
+    "floor_pattern": "simmer.world.maze",
+    "Robot": "simmer.world.robot",
+    "Simulation": "simmer.world.simulation",
+    **dict.fromkeys(
+        (
+            "CollisionEndEvent",
+            "CollisionEvent",
+            "CommandEvent",
+            "Event",
+            "KeysEvent",
+            "PlaceEvent",
+            "ReachedEvent",
+            "ResetEvent",
+            "RunEvent",
+            "StepEvent",
+        ),
+        "simmer.world.events",
+    ),
+}
+
+if TYPE_CHECKING:
+    from simmer.world.events import (
+        CollisionEndEvent,
+        CollisionEvent,
+        CommandEvent,
+        Event,
+        KeysEvent,
+        PlaceEvent,
+        ReachedEvent,
+        ResetEvent,
+        RunEvent,
+        StepEvent,
+    )
+    from simmer.world.maze import Block, Maze, floor_pattern
+    from simmer.world.robot import Robot
+    from simmer.world.simulation import Simulation
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its module the first time it is used."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'simmer.world' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_LAZY])
+
 
 __all__ = [
     "Block",

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from simmer.geometry import Pose
+from simmer.pose import Pose
 
 
 @dataclass(frozen=True)

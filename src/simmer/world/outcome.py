@@ -2,8 +2,12 @@
 
 :class:`Outcome` is an observer: attach it with :meth:`Outcome.attach` and it follows the run;
 :meth:`Outcome.report` gives the figures the lab asks for (the Task 2 time from the robot's
-first motion to reaching the block, collisions, path length, commands and NaN replies, final
-pose) for the heads-up display, the end of a headless run, and Python.
+first motion to reaching the block, collisions, path length, commands, busy and NaN replies,
+final pose) for the heads-up display, the end of a headless run, and Python.
+
+"Reached the block": the robot's outline comes within :data:`REACH_DISTANCE` (1 in) of the
+block's. The Task 2 stopwatch runs from the robot's first motion (the first step its pose
+changes, however it was moved) until then.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simmer.geometry import Pose, polygon_gap
+from simmer.protocol import parse_message
 from simmer.world.events import (
     CollisionEvent,
     CommandEvent,
@@ -57,7 +62,11 @@ class OutcomeReport:
     messages: int
     commands: int
     nan_replies: int
+    """NaN replies other than busy ones: malformed commands, unknown or switched-off devices."""
     final_pose: Pose
+    busy_replies: int = 0
+    """Drive commands refused (NaN) because a drive was still moving: a program polling
+    ``w0-0`` until its move is done gets these, and nothing is wrong."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
@@ -83,8 +92,8 @@ class OutcomeReport:
                 f"  collisions {self.collisions}{first}, {self.blocked_steps} steps blocked; "
                 f"path {self.path_length:.1f} in",
                 f"  {self.messages} messages, {self.commands} commands, "
-                f"{self.nan_replies} NaN replies; final pose x {x:.2f} in, y {y:.2f} in, "
-                f"heading {heading:.1f} deg",
+                f"{self.busy_replies} busy (a drive still moving), {self.nan_replies} NaN "
+                f"replies; final pose x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg",
             ]
         )
 
@@ -118,6 +127,7 @@ class Outcome:
         self.messages = 0
         self.commands = 0
         self.nan_replies = 0
+        self.busy_replies = 0
         self._blocked_before = self.sim.blocked_steps
         self._last_pose: Pose = self.sim.robot.pose
 
@@ -139,7 +149,10 @@ class Outcome:
         elif isinstance(event, CommandEvent):
             self.messages += 1
             self.commands += len(event.replies)
-            self.nan_replies += sum(math.isnan(value) for value in event.replies)
+            nan = sum(math.isnan(value) for value in event.replies)
+            busy = self._busy(event) if nan else 0
+            self.busy_replies += busy
+            self.nan_replies += nan - busy
         elif isinstance(event, CollisionEvent):
             self.collisions += 1
             if self.first_collision is None:
@@ -148,6 +161,24 @@ class Outcome:
             self._placed(event.pose)
         elif isinstance(event, ResetEvent):
             self._clear()
+
+    def _busy(self, event: CommandEvent) -> int:
+        """How many of a message's NaN replies are drive commands refused because a drive is
+        moving (the event comes just after the message ran, so the robot is as it found it)."""
+        sim = self.sim
+        robot = sim.robot
+        if not robot.any_drive_moving:
+            return 0
+        commands = parse_message(event.message, lenient=sim.config.settings.lenient_commands)
+        if len(commands) != len(event.replies):
+            return 0
+        return sum(
+            math.isnan(reply)
+            and command.error is None
+            and command.device in robot.drives
+            and command.device not in sim.switched_off
+            for command, reply in zip(commands, event.replies, strict=True)
+        )
 
     def _placed(self, pose: Pose) -> None:
         """The robot was put somewhere by hand (dragged in the window): that is no motion (no
@@ -190,4 +221,5 @@ class Outcome:
             commands=self.commands,
             nan_replies=self.nan_replies,
             final_pose=self.sim.robot.pose,
+            busy_replies=self.busy_replies,
         )

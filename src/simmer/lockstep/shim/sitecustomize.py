@@ -7,9 +7,17 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
   ``_ns`` forms) follow the simulation's clock: a ``sleep(0.1)`` asks the simulator to advance
   by exactly 0.1 s and returns when it has (``!sleep``); a clock read asks for the time
   (``!time``). Both go over one persistent-protocol connection of their own.
-* A connection to 127.0.0.1 on SimMeR's standard ports (61200, 61201, 61202) goes to the ports
-  chosen for this run (``SIMMER_PORT_MAP``), so an unmodified program finds its simulator and
-  several runs can share a machine.
+* A connection to 127.0.0.1 on SimMeR's standard ports (61200, 61201, 61202, and the ports the
+  configuration names) goes to the ports chosen for this run (``SIMMER_PORT_MAP``), so an
+  unmodified program finds its simulator and several runs can share a machine.
+* Nothing the program wrote towards the simulator is overtaken: the shim counts the bytes it
+  writes on message connections (two-port ``port_rx``, the persistent port, the serial port)
+  and every clock message says how many (`` @N``), so the simulator acts on it only after
+  taking them all. A message sent on a two-port connection just before ``time.sleep`` is
+  therefore taken before the sleep, however the two connections race. The same count is
+  synchronised (``!sync @N``) before a reply connection opens and before the program writes
+  on another connection than the last, so the simulator takes messages in the order the
+  program wrote them. A program that waits for each reply never needs the extra message.
 
 Only the standard library is used, so the program starts as fast as it would by hand. If the
 program's environment has a ``sitecustomize`` of its own, it is run afterwards.
@@ -25,6 +33,7 @@ import struct
 import sys
 import threading
 import time
+import weakref
 from collections.abc import Callable
 from typing import Any
 
@@ -70,11 +79,53 @@ class _Clock:
         return data
 
 
+class _Written:
+    """The bytes the program has written towards the simulator on its message connections,
+    and how many of them the simulator has said it took (see the module doc)."""
+
+    def __init__(self, clock: _Clock) -> None:
+        self.clock = clock
+        self.total = 0
+        self.confirmed = 0
+        self.last: Any = None  # the connection written to last (a weak reference or an fd)
+        self.lock = threading.Lock()
+
+    def ask(self, message: str) -> float:
+        """A clock message carrying the count: the simulator acts on it once it has taken
+        every byte written so far."""
+        written = self.total
+        value = self.clock.ask(f"{message} @{written}")
+        self.confirmed = max(self.confirmed, written)
+        return value
+
+    def sync(self) -> None:
+        """Wait until the simulator has taken everything written so far (if anything new)."""
+        if self.total > self.confirmed:
+            self.ask("!sync")
+
+    def before(self, key: Any) -> None:
+        """About to write on connection ``key``: first let the simulator take what was
+        written on another one."""
+        last = self.last() if isinstance(self.last, weakref.ref) else self.last
+        if last != key and self.total > self.confirmed:
+            self.ask("!sync")
+
+    def wrote(self, key: Any, size: int) -> None:
+        with self.lock:
+            self.total += max(size, 0)
+        self.last = weakref.ref(key) if isinstance(key, socket.socket) else key
+
+
+def _ports(name: str) -> set[int]:
+    return {int(port) for port in os.environ.get(name, "").split(",") if port.isdigit()}
+
+
 def _install(address: str) -> None:
     host, _, port = address.rpartition(":")
     real_connect = socket.socket.connect
     real_connect_ex = socket.socket.connect_ex
     clock = _Clock(host, int(port), real_connect)
+    written = _Written(clock)
     epoch = float(os.environ.get("SIMMER_EPOCH", "0"))
 
     def sleep(seconds: float) -> None:
@@ -82,10 +133,10 @@ def _install(address: str) -> None:
         seconds = float(seconds)
         if seconds < 0:
             raise ValueError("sleep length must be non-negative")
-        clock.ask(f"!sleep {seconds!r}")
+        written.ask(f"!sleep {seconds!r}")
 
     def now() -> float:
-        return clock.ask("!time")
+        return written.ask("!time")
 
     # partial objects, like the built-ins they replace, do not bind as methods when a library
     # keeps one as a class attribute (pyserial's ``TIME = time.monotonic``)
@@ -101,22 +152,90 @@ def _install(address: str) -> None:
     for pair in filter(None, os.environ.get("SIMMER_PORT_MAP", "").split(",")):
         standard, _, actual = pair.partition("=")
         ports[int(standard)] = int(actual)
+    local = _LOCAL | {os.environ.get("SIMMER_HOST", "127.0.0.1")}
+    message_ports = _ports("SIMMER_MESSAGE_PORTS")
+    reply_ports = _ports("SIMMER_REPLY_PORTS")
+    roles: weakref.WeakKeyDictionary[socket.socket, str] = weakref.WeakKeyDictionary()
 
-    def redirect(address: Any) -> Any:
-        if isinstance(address, tuple) and len(address) >= 2 and address[0] in _LOCAL:
-            port = ports.get(address[1])
-            if port is not None:
-                return (address[0], port, *address[2:])
-        return address
+    def redirect(address: Any) -> tuple[Any, str | None]:
+        """Where to connect instead, and the connection's role (None: not the simulator)."""
+        if not (isinstance(address, tuple) and len(address) >= 2 and address[0] in local):
+            return address, None
+        port = ports.get(address[1], address[1])
+        role = "message" if port in message_ports else "reply" if port in reply_ports else None
+        return (address[0], port, *address[2:]), role
 
     def connect(self: socket.socket, address: Any) -> None:
-        real_connect(self, redirect(address))
+        target, role = redirect(address)
+        if role == "reply":
+            written.sync()
+        real_connect(self, target)
+        if role is not None:
+            roles[self] = role
 
     def connect_ex(self: socket.socket, address: Any) -> int:
-        return int(real_connect_ex(self, redirect(address)))
+        target, role = redirect(address)
+        if role == "reply":
+            written.sync()
+        result = int(real_connect_ex(self, target))
+        if role is not None:
+            roles[self] = role
+        return result
+
+    real_send = socket.socket.send
+    real_sendall = socket.socket.sendall
+
+    def send(self: socket.socket, data: Any, *args: Any) -> int:
+        if roles.get(self) != "message":
+            return int(real_send(self, data, *args))
+        written.before(self)
+        sent = int(real_send(self, data, *args))
+        written.wrote(self, sent)
+        return sent
+
+    def sendall(self: socket.socket, data: Any, *args: Any) -> None:
+        if roles.get(self) != "message":
+            real_sendall(self, data, *args)
+            return
+        written.before(self)
+        real_sendall(self, data, *args)
+        written.wrote(self, memoryview(data).nbytes)
 
     socket.socket.connect = connect  # type: ignore[method-assign,assignment]
     socket.socket.connect_ex = connect_ex  # type: ignore[method-assign,assignment]
+    socket.socket.send = send  # type: ignore[method-assign,assignment]
+    socket.socket.sendall = sendall  # type: ignore[method-assign,assignment]
+    if os.environ.get("SIMMER_SERIAL"):
+        _count_serial(os.path.realpath(os.environ["SIMMER_SERIAL"]), written)
+
+
+def _count_serial(device: str, written: _Written) -> None:
+    """Count what the program writes to the virtual serial port ``device`` (pyserial opens it
+    with ``os.open`` and writes with ``os.write``)."""
+    real_open, real_write, real_close = os.open, os.write, os.close
+    serial: set[int] = set()
+
+    def open_(path: Any, flags: int, *args: Any, **kwargs: Any) -> int:
+        fd = real_open(path, flags, *args, **kwargs)
+        if isinstance(path, str | bytes | os.PathLike) and os.path.realpath(path) == device:
+            serial.add(fd)
+        return fd
+
+    def write(fd: int, data: Any) -> int:
+        if fd not in serial:
+            return real_write(fd, data)
+        written.before(fd)
+        size = real_write(fd, data)
+        written.wrote(fd, size)
+        return size
+
+    def close(fd: int) -> None:
+        serial.discard(fd)
+        real_close(fd)
+
+    os.open = open_
+    os.write = write
+    os.close = close
 
 
 def _chain() -> None:
