@@ -77,6 +77,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help as written: [u0] stays, no boxes, no <bool>
 )
+_AS_COMMAND: list[bool] = []
+"""Holds True when this process is the ``simmer`` command (:func:`main`), not a program that
+calls the app (a test): only then does ``run --program`` make it a subreaper."""
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
@@ -481,8 +484,8 @@ def run(
             err.print(f"cannot record into {record}: {exc}", style="bold red", markup=False)
             raise typer.Exit(1) from None
         seconds, timeout = _recorded_run_limits(seconds, timeout, program)
-    if program is not None:  # the program's detached children stay in sight (simmer.proctree)
-        from simmer.proctree import adopt_orphans
+    if program is not None and _AS_COMMAND:  # its detached children stay in sight
+        from simmer.proctree import adopt_orphans  # (not when embedded: simmer.proctree)
 
         adopt_orphans()
     log_file = _log_to_file() if program is not None else None
@@ -970,4 +973,5 @@ def console(
 def main() -> None:
     """Entry point of the ``simmer`` console script."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    _AS_COMMAND.append(True)
     app()

@@ -221,9 +221,9 @@ class UntrustedRun(ReplayError):
         names = ", ".join(self.plugins)
         super().__init__(
             f"{where or 'the manifest'}: the run was recorded with plug-ins ({names}), and "
-            "re-simulating it runs their "
-            "code: a run folder is data, so SimMeR does not, unless asked. If you trust whoever "
-            "made the folder, add --trust; or name your own copies with --plugin FILE"
+            "re-simulating it runs their code: a run folder is data, so SimMeR does not, unless "
+            "asked. If you trust whoever made the folder, add --trust; or name your own copies "
+            "with --plugin FILE"
         )
 
 

@@ -83,7 +83,6 @@ class TraceWriter:
         """Rows made, written or waiting to be."""
         self.rows = 0
         """Rows in the file (without the header)."""
-        self._write(",".join(trace_columns(sensors)) + "\n", 0)
         self._column = {sensor: i for i, sensor in enumerate(sensors)}
         self._readings: list[float | None] = [None] * len(sensors)
         self._rows: list[str] = []
@@ -101,6 +100,7 @@ class TraceWriter:
         self._flush_at = time.monotonic() + FLUSH_INTERVAL
         self.resets = 0
         """Resets seen (each puts the time back to 0)."""
+        self._write(",".join(trace_columns(sensors)) + "\n", 0)
 
     def begin(self, time_s: float, step: int, pose: Pose) -> None:
         """Write the row of the state the run starts from (before its first step)."""

@@ -91,7 +91,7 @@ STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
 class SweepStopped(KeyboardInterrupt):
-    """A signal stopped the sweep (as Ctrl-C does); ``signal`` names it."""
+    """A signal stopped the sweep (as Ctrl-C does); ``signum`` and ``name`` say which."""
 
     def __init__(self, signum: int) -> None:
         self.signum = signum
