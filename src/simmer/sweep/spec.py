@@ -323,12 +323,17 @@ def _short_keys(text: str, path: Path) -> str:
     for line in text.splitlines():
         key = line.split("=", 1)[0] if "=" in line else line
         if key.count(".") > 4 * MAX_KEY_PARTS:
-            shown = ".".join(key.strip().strip("[\"'").split(".")[:4])
-            raise SweepError(
-                f"{path}: {shown}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
-                f"{LIMITS}); configuration keys have at most 5"
-            )
+            names = key.strip().strip("[\"'").split(".")
+            raise SweepError(f"{path}: {_long_key(names)}")
     return text
+
+
+def _long_key(names: list[str]) -> str:
+    """What is wrong with a key of these many names."""
+    return (
+        f"{'.'.join(names[:4])}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
+        f"{LIMITS}); configuration keys have at most 5"
+    )
 
 
 def _read_text(path: Path) -> str:
@@ -471,11 +476,7 @@ def _dotted(
     for key, value in table.items():
         names = (*way, *key.split("."))
         if len(names) > MAX_KEY_PARTS:
-            shown = ".".join(names[:4])
-            raise SweepError(
-                f"{shown}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
-                f"{LIMITS}); configuration keys have at most 5"
-            )
+            raise SweepError(_long_key(list(names)))
         if isinstance(value, dict) and value and not leaf(value):
             entries += [(f"{key}.{inner}", v) for inner, v in _dotted(value, leaf, names)]
         else:
