@@ -44,7 +44,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from simmer.proctree import adopt_orphans, stop_strays
+from simmer.proctree import adopt_orphans, descendants, stop_strays
 from simmer.sweep.results import (
     ResultsFile,
     header,
@@ -85,7 +85,8 @@ class SweepResult:
 PARENT_POLL = 0.5
 """Wall seconds between a worker's checks that the sweep that started it is still there."""
 PARENT_GRACE = 10.0
-"""Wall seconds a worker whose sweep is gone gives its run to stop before it exits anyway."""
+"""Wall seconds a worker whose sweep is gone gives its run's program to stop (as Ctrl-C stops
+it) before it stops what is left and exits."""
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 """Signals that stop a sweep cleanly (Ctrl-C, ``kill``, closing the terminal), where they exist."""
 
@@ -126,7 +127,9 @@ def _watch_parent(parent: int) -> None:
             if os.getppid() != parent:
                 gone.set()
         _thread.interrupt_main()  # a run in progress stops, as with Ctrl-C
-        time.sleep(PARENT_GRACE)  # this worker's own clock: it is exiting anyway
+        deadline = time.monotonic() + PARENT_GRACE
+        while descendants() and time.monotonic() < deadline:  # its program is being stopped
+            threading.Event().wait(PARENT_POLL / 5)
         stop_strays(set())
         os._exit(1)
 
