@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 
 from simmer.cli import app
 from simmer.sweep import load_sweep
+from simmer.sweep.results import ResultsFile
 from simmer.sweep.runs import STDERR_TAIL, RunSpec, execute
 from simmer.sweep.spec import MAX_RUNS, SweepError
 
@@ -129,3 +130,19 @@ def test_a_run_that_floods_its_output_keeps_only_the_tail(tmp_path: Path) -> Non
     assert result.exit_status == 1
     assert result.detail.endswith("the last words")
     assert len(result.detail) <= STDERR_TAIL
+
+
+def test_resumed_results_are_data(tmp_path: Path) -> None:
+    """--resume reads results.csv back: a row whose folder points out of runs/ is not taken as
+    done (the filming of failures would write there), and a file that is not a table is one
+    line naming it."""
+    columns = ["seed", "success", "run", "folder", "detail"]
+    path = tmp_path / "results.csv"
+    rows = [columns, ["0", "False", "aaa", "../../outside", ""], ["1", "True", "bbb", "runs/x", ""]]
+    path.write_text("".join(",".join(row) + "\n" for row in rows))
+    results = ResultsFile(path, columns, resume=True)
+    results.close()
+    assert list(results.done) == ["bbb"]
+    path.write_bytes(b"seed,success\n\xff\xfe\x00junk\n")
+    with pytest.raises(ValueError, match=r"results.csv is not a results table"):
+        ResultsFile(path, columns, resume=True)
