@@ -204,12 +204,28 @@ HOSTILE: dict[str, tuple[Callable[[Path], None], tuple[str, ...], tuple[str, ...
         ("replay",),
         ("manifest.json: not a run's manifest",),
     ),
+    "events of 300 MB": (
+        lambda f: _grow(f / "events.jsonl"),
+        ("replay", "plot"),
+        ("events.jsonl is 314,572,800 bytes, more than a recording holds",),
+    ),
+    "trace of 300 MB": (
+        lambda f: _grow(f / "trace.csv"),
+        ("replay", "plot"),
+        ("trace.csv is 314,572,800 bytes",),
+    ),
     "trace huge step": (
         lambda f: (f / "report.json").unlink() or _append(f / "trace.csv", "99999999999"),
         ("replay",),
         ("trace.csv", "limit"),
     ),
 }
+
+
+def _grow(path: Path) -> None:
+    """Make ``path`` 300 MB (sparse: nothing is written)."""
+    with path.open("r+b") as file:
+        file.truncate(300 * 2**20)
 
 
 def _append(path: Path, step: str) -> None:

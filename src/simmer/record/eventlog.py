@@ -88,6 +88,16 @@ class RecordingBudget:
         )
 
 
+def check_size(path: Path) -> None:
+    """ValueError naming ``path`` if it is larger than a recording's files hold
+    (:data:`MAX_RECORDING_BYTES`): a reader refuses it rather than read it whole."""
+    size = path.stat().st_size
+    if size > MAX_RECORDING_BYTES:
+        raise ValueError(
+            f"{path} is {size:,} bytes, more than a recording holds ({MAX_RECORDING_BYTES:,})"
+        )
+
+
 def stop_reason(exc: OSError) -> str:
     """Why a write failed, in words for "the recording in DIR stopped: ..."."""
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
@@ -219,12 +229,7 @@ def read_events(path: str | Path, max_steps: int | None = None) -> list[Event]:
     file larger than :data:`MAX_RECORDING_BYTES`.
     """
     path = Path(path)
-    size = path.stat().st_size
-    if size > MAX_RECORDING_BYTES:
-        raise ValueError(
-            f"{path} is {size:,} bytes, more than a recording holds "
-            f"({MAX_RECORDING_BYTES:,}): not a run's events"
-        )
+    check_size(path)
     events: list[Event] = []
     before = 0
     """Steps of the parts of the run before the last reset."""

@@ -229,18 +229,15 @@ def read_run(folder: str | Path) -> RecordedRun:
 
 def _read_trace(path: Path) -> Trace:
     """The trace's columns; a new part wherever the clock goes back (a reset)."""
-    from simmer.record.eventlog import MAX_RECORDING_BYTES
+    from simmer.record.eventlog import check_size
 
     try:
-        if path.stat().st_size > MAX_RECORDING_BYTES:
-            raise PlotError(
-                f"{path} is larger than a recording holds ({MAX_RECORDING_BYTES:,} bytes)"
-            )
+        check_size(path)
         with path.open(newline="", encoding="utf-8") as file:
             reader = csv.reader(file)
             header = [name.strip() for name in next(reader, [])]
             rows = list(reader)
-    except (OSError, UnicodeError, csv.Error) as exc:
+    except (OSError, ValueError, csv.Error) as exc:  # a UnicodeError is a ValueError
         raise PlotError(f"cannot read {path}: {exc}") from None
     missing = [name for name in TRACE_REQUIRED if name not in header]
     if missing:
@@ -341,11 +338,13 @@ def _read_events(path: Path, run: RecordedRun) -> None:
     """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``;
     PlotError for an event at a time no run of the limit reaches (:data:`MAX_RUN_SECONDS`
     past the trace's end: a label there overflows the drawing)."""
-    from simmer.record.eventlog import MAX_RECORDING_BYTES
+    from simmer.record.eventlog import check_size
     from simmer.record.runfolder import MAX_RUN_SECONDS
 
-    if path.stat().st_size > MAX_RECORDING_BYTES:
-        raise PlotError(f"{path} is larger than a recording holds ({MAX_RECORDING_BYTES:,} bytes)")
+    try:
+        check_size(path)
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
     latest = float(np.max(run.trace.time)) + MAX_RUN_SECONDS
     part = 0
     for number, event in _json_lines(path):

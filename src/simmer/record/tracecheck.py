@@ -64,13 +64,10 @@ def read_trace_rows(path: str | Path) -> TraceRows:
     """The rows of a ``trace.csv`` (OSError if it cannot be read; ValueError if it has no
     ``step`` column, or is larger than a recording holds). A last line without its newline,
     or with too few cells, is left out."""
-    from simmer.record.eventlog import MAX_RECORDING_BYTES
+    from simmer.record.eventlog import check_size
 
-    with Path(path).open("rb") as file:
-        data = file.read(MAX_RECORDING_BYTES + 1)
-    if len(data) > MAX_RECORDING_BYTES:
-        raise ValueError(f"{path} is larger than a recording holds ({MAX_RECORDING_BYTES:,} bytes)")
-    text = data.decode("utf-8")
+    check_size(Path(path))
+    text = Path(path).read_text(encoding="utf-8")
     if text and not text.endswith("\n"):
         text = text[: text.rfind("\n") + 1]
     try:
