@@ -22,7 +22,9 @@ from simmer.lockstep import (
     program_environment,
     runs_python,
 )
+from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder, RunSetup
+from simmer.record.eventlog import MAX_RECORDING_BYTES
 from simmer.runner import Runner
 from simmer.transport import STREAM_PORT, Transports
 from simmer.world import Simulation
@@ -96,6 +98,8 @@ class Served:
     program_status: int | None = None
     """The control program's exit status, if it ended the run."""
     program_started: bool = False
+    recording_stopped: str | None = None
+    """Why the recording stopped before the run ended (a full disk, its size limit), if it did."""
 
     @property
     def exit_status(self) -> int:
@@ -131,6 +135,7 @@ def serve(
     record: Path | None = None,
     video: Path | None = None,
     answer: str | None = None,
+    record_limit: int = MAX_RECORDING_BYTES,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -139,8 +144,11 @@ def serve(
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
-    with a window or headless, and the file is finished however the run ends. With ``answer``,
-    the program's standard input is that text, a line, then its end (what a student types at
+    with a window or headless, and the file is finished however the run ends. A recording
+    that reaches ``record_limit`` bytes or fills the disk stops (the run goes on), and
+    :attr:`Served.recording_stopped` says so. When the run ends, every process the program
+    started is stopped, however it detached (:mod:`simmer.proctree`). With ``answer``, the
+    program's standard input is that text, a line, then its end (what a student types at
     the program's ``input()`` prompt: the project's target zone).
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
@@ -153,6 +161,7 @@ def serve(
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
+    before: set[int] = set()
     signalled: list[str] = []
     restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     recorder: RunRecorder | None = None
@@ -174,7 +183,9 @@ def serve(
                 clock = "lockstep" if lockstep else "realtime"
                 delay = runner.link_delay if lockstep else None
                 setup = RunSetup(clock, speed, delay, program, window)
-                recorder = RunRecorder(sim, record, setup, outcome)
+                recorder = RunRecorder(
+                    sim, record, setup, outcome, max_bytes=record_limit, on_stop=_say(echo)
+                )
                 echo(f"recording the run into {record}")
             if video is not None:
                 from simmer.ui.video import VideoRecorder
@@ -191,6 +202,7 @@ def serve(
                 if program is not None and not runs_python(program):
                     echo(NOT_PYTHON.format(command=program))
             if program is not None:
+                before = descendants()
                 started = _start_program(
                     program, transports, sim.config, runner.bus, stop, ended, timeout, echo, answer
                 )
@@ -220,6 +232,7 @@ def serve(
         runner.bus.close()
         if started is not None:
             started.stop()
+            stop_strays(before)
         if filming is not None:
             _finish_video(filming, echo)
         restore_signals()
@@ -229,7 +242,18 @@ def serve(
     served = Served(runner, outcome, ended[0], status, program_started=started is not None)
     if recorder is not None:
         recorder.close(served.ended_by, status)
+        served.recording_stopped = recorder.stopped
     return served
+
+
+def _say(echo: Callable[[str], None]) -> Callable[[str], None]:
+    """Say a recording stopped, in the log and where the run's messages go."""
+
+    def say(line: str) -> None:
+        log.error("%s; the run goes on", line)
+        echo(f"{line}; the run goes on")
+
+    return say
 
 
 def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:

@@ -24,7 +24,7 @@ from simmer.errors import ConfigError, ConfigIssue
 BUILTIN_SOURCE = "<built-in default>"
 MAX_FILE_BYTES = 1_000_000
 """Largest configuration file read: the lab's are 3 kB, and the walls of the largest maze
-allowed (200 x 200 cells) take 120 kB; a larger file is the wrong file, and reading it would
+allowed (500 x 500 cells) take 750 kB; a larger file is the wrong file, and reading it would
 take minutes and gigabytes."""
 
 __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here for older imports
@@ -73,6 +73,17 @@ def read_config_data(path: str | Path) -> tuple[dict[str, Any], bool]:
 def _checked_file(path: str | Path) -> Path:
     """``path``, if it is a file small enough to be a configuration (else a ConfigError)."""
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise ConfigError(
+            path,
+            [
+                ConfigIssue(
+                    "",
+                    "is not a regular file (a folder, a device or a pipe); give a "
+                    "configuration file (.toml or config.py)",
+                )
+            ],
+        )
     if not path.is_file():
         raise ConfigError(
             path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
@@ -85,7 +96,7 @@ def _checked_file(path: str | Path) -> Path:
                 ConfigIssue(
                     "",
                     f"is {size:,} bytes, more than any configuration ({MAX_FILE_BYTES:,} at "
-                    "most: even a 200 x 200 maze takes 120,000); is this the right file?",
+                    "most: even a 500 x 500 maze takes 750,000); is this the right file?",
                 )
             ],
         )
