@@ -17,7 +17,7 @@ from pathlib import Path
 
 from simmer import Simulation
 from simmer.runner import Runner
-from simmer.transport.link import Link
+from simmer.transport.transports import Transports
 from simmer.world.outcome import Outcome
 
 MARKS = (10_000, 100_000, 300_000)
@@ -37,7 +37,7 @@ def soak() -> dict[int, float]:
     sim = Simulation.from_config()
     Outcome.attach(sim)
     runner = Runner(sim, speed=None)
-    link = Link(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0)
+    link = Transports(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0)
     stop = threading.Event()
     loop = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     found = {}

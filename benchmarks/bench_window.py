@@ -8,7 +8,7 @@
    draws and flips in the main thread while the simulation thread answers. It uses the display
    in ``DISPLAY`` if there is one (e.g. under ``xvfb-run``), else SDL's dummy driver.
 3. Video: wall time to record the lab's dead-reckoning run (examples/dead_reckoning.py's
-   sequence on the lockstep clock through :class:`~simmer.transport.local.LocalLink`, about 28
+   sequence on the lockstep clock through :class:`~simmer.runner.LocalLink`, about 28
    simulated seconds) at 30 frames/s and the window's size, as MP4 (median of three) and GIF,
    and the megabytes per minute of video.
 
@@ -33,9 +33,8 @@ import pygame
 
 from simmer import Simulation
 from simmer.client import Client, connect
-from simmer.runner import Runner
-from simmer.transport import Link
-from simmer.transport.local import LocalLink
+from simmer.runner import LocalLink, Runner
+from simmer.transport import Transports
 from simmer.ui import Bridge, Window
 from simmer.ui.scene import default_window_size
 from simmer.ui.video import VideoRecorder
@@ -117,7 +116,7 @@ def measure_latency(count: int = 600) -> tuple[float, float, float, float, str]:
             stop.set()
 
     try:
-        with Link(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0) as link:
+        with Transports(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0) as link:
             thread = threading.Thread(target=program, args=(link.stream.port,))
             thread.start()
             window.run(runner, stop=stop)

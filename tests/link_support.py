@@ -10,7 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from simmer.runner import Runner
-from simmer.transport import Link
+from simmer.transport import Transports
 from simmer.world import Simulation
 
 
@@ -21,13 +21,13 @@ def serving(
     speed: float | None = 1.0,
     serial: bool = False,
     serial_link: Path | None = None,
-) -> Iterator[tuple[Runner, Link]]:
+) -> Iterator[tuple[Runner, Transports]]:
     """Run a simulation (default: the built-in one) in a loop thread, serving every transport
     on free ports; everything is stopped and closed on exit."""
     sim = sim if sim is not None else Simulation.from_config()
     runner = Runner(sim, speed=speed)
     stop = threading.Event()
-    link = Link(
+    link = Transports(
         runner.bus,
         sim.config,
         port_rx=0,
@@ -47,7 +47,7 @@ def serving(
             runner.bus.close()
 
 
-def two_port_raw(link: Link, message: bytes) -> bytes:
+def two_port_raw(link: Transports, message: bytes) -> bytes:
     """The original clients' way: send on port_rx and close, then read port_tx to the end."""
     with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
         out.sendall(message)
@@ -58,7 +58,7 @@ def two_port_raw(link: Link, message: bytes) -> bytes:
     return data
 
 
-def two_port_send(link: Link, message: bytes, width: int = 4) -> list[float]:
+def two_port_send(link: Transports, message: bytes, width: int = 4) -> list[float]:
     """:func:`two_port_raw`, the reply unpacked as floats of ``width`` bytes."""
     code = "<f" if width == 4 else "<d"
     return [value for (value,) in struct.iter_unpack(code, two_port_raw(link, message))]

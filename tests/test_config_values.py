@@ -233,7 +233,7 @@ def test_a_maze_of_10000_by_10000_cells_is_refused_at_once(no_floor_drawn: None)
     assert issues == [
         (
             "walls",
-            "has 10,000 rows; at most 200 rows of 200 cells (the lab maze has 4 rows of 8), "
+            "has 10,000 rows; at most 500 rows of 500 cells (the lab maze has 4 rows of 8), "
             "because every wall is stored and drawn, and a reading walks the maze cell by cell",
         )
     ]
@@ -248,11 +248,23 @@ def test_a_row_too_long_is_named() -> None:
 def test_the_largest_maze_allowed_runs() -> None:
     data = default_data()
     side = MAX_CELLS_PER_SIDE
-    data |= {"walls": [[1] * side] * side, "ppi": 6, "block_position": [18, 6]}
+    data |= {  # a drawing of at most 16,384 pixels a side, a floor of at most 1e6 tiles
+        "walls": [[1] * side] * side,
+        "ppi": 2,
+        "floor_segment_length": 12,
+        "block_position": [18, 6],
+    }
     config = make_config(data)
     maze = Maze.from_settings(config.settings)
     assert maze.solid.shape == (side, side)
     assert maze.floor_white.size <= 1_000_000
+
+
+def test_a_maze_of_160_by_320_cells_as_the_original_built_is_accepted() -> None:
+    data = default_data()
+    data |= {"walls": [[1] * 320] * 160, "ppi": 4, "block_position": [18, 6]}
+    config = make_config(data)  # the default floor: 640 x 1,280 tiles
+    assert Maze.from_settings(config.settings).solid.shape == (160, 320)
 
 
 def test_the_timeout_limit_fits_the_system_timers() -> None:
@@ -339,7 +351,7 @@ def test_a_plugin_calling_sys_exit_is_reported_not_obeyed(tmp_path: Path) -> Non
     assert status == 1
     assert (
         f"{path}:1: plugins[0]: importing quitter.py failed at line 3: SystemExit: 3; a plug-in "
-        "may not end the program: remove its sys.exit() or exit() call"
+        "may not end the program: remove its sys.exit(), exit() or os._exit() call"
     ) in output.replace("\n  ", " ")
 
 

@@ -115,7 +115,7 @@ def test_each_help_page_is_as_written_with_an_example(command: str) -> None:
     text = result.output
     assert "Example:\n" in text
     assert f"    simmer {command}" in text
-    for typer_marks in ("<bool>", "<str>", "<path>", "<int", "{", "--no-"):
+    for typer_marks in ("<bool>", "<str>", "<path>", "<int", "{config", "--no-"):
         assert typer_marks not in text, typer_marks
 
 

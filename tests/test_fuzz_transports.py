@@ -16,7 +16,7 @@ import serial
 
 from link_support import read_frame, serving
 from simmer.protocol import EXPLAIN, MAX_COMMANDS, MAX_MESSAGE_BYTES
-from simmer.transport import Link
+from simmer.transport import Transports
 
 pytestmark = pytest.mark.timeout(120)
 SEED = 20240901
@@ -90,7 +90,7 @@ def floats(data: bytes) -> list[float]:
     return [value for (value,) in struct.iter_unpack("<f", data)]
 
 
-def good_client_served(link: Link) -> None:
+def good_client_served(link: Transports) -> None:
     with socket.create_connection(("127.0.0.1", link.stream.port), timeout=10) as sock:
         sock.sendall(b"u1\n")
         assert read_frame(sock) == [pytest.approx(3.5)]

@@ -18,7 +18,6 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future
 from pathlib import Path
 
 import pytest
@@ -38,6 +37,7 @@ from simmer.protocol import (
 )
 from simmer.runner import LOG_LINES_PER_SECOND, Runner
 from simmer.transport import CommandBus, SerialServer, StreamServer
+from simmer.transport.bus import Reply
 from simmer.transport.tcp import MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
 from simmer.world import Simulation
 
@@ -630,7 +630,7 @@ def test_a_request_carries_its_reasons() -> None:
     runner = Runner(Simulation.from_config(), bus=bus)
     request = bus.request("u0,zz", "test")
     runner.serve()
-    assert isinstance(request.future, Future)
+    assert isinstance(request.future, Reply)
     assert request.future.result()[0] > 0
     assert len(request.reasons) == 1
     assert "no device 'zz'" in request.reasons[0]

@@ -27,8 +27,8 @@ from simmer.localize.expected import SUPPORTED, parse_headings, table
 from simmer.localize.metrics import LocalizationReport, Tracker, errors, localized_at
 from simmer.protocol import FRAME_HEADER
 from simmer.record.eventlog import read_events
+from simmer.runner import LocalLink
 from simmer.serve import serve
-from simmer.transport.local import LocalLink
 from simmer.world import Simulation
 from simmer.world.events import SHOWN, BeliefEvent, CommandEvent, EstimateEvent, Event, RunEvent
 

@@ -14,8 +14,8 @@ import pytest
 from simmer import Simulation
 from simmer.client import Client
 from simmer.lockstep import runs_python
+from simmer.runner import LocalLink
 from simmer.serve import Served, serve
-from simmer.transport.local import LocalLink
 from simmer.world.events import CommandEvent, Event, StepEvent
 
 from helpers import EXAMPLES, REPO, noisy_config

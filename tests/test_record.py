@@ -120,7 +120,7 @@ def test_the_manifest_rebuilds_the_configuration(tmp_path: Path, path: Path | No
     sim = Simulation(load_config(path), seed=5)
     with RunRecorder(sim, tmp_path / "run"):
         sim.step(3)
-    config, seed, _ = load_run(tmp_path / "run")
+    config, seed, _ = load_run(tmp_path / "run", trust=True)  # our own run: trusted
     assert seed == 5
     assert config.settings == sim.config.settings
     assert config.devices == sim.config.devices

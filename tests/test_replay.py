@@ -69,7 +69,7 @@ def test_events_carry_time_and_step_and_observers_can_leave() -> None:
 
 
 def test_the_loop_reports_pause_speed_and_clock_messages() -> None:
-    from simmer.transport.local import LocalLink
+    from simmer.runner import LocalLink
 
     sim = Simulation.from_config()
     link = LocalLink(sim)

@@ -452,8 +452,8 @@ def test_what_cannot_be_replayed_is_said_in_one_line(tmp_path: Path, copy: Path)
         "a video file ends in .mp4 or .gif"
     )
     (copy / "manifest.json").write_text("{not json")
-    assert fails("replay", str(copy)).startswith(f"cannot read {copy / 'manifest.json'}")
-    with pytest.raises(ReplayError, match="cannot read"):
+    assert fails("replay", str(copy)).startswith(f"{copy / 'manifest.json'} is not readable JSON")
+    with pytest.raises(ReplayError, match="is not readable JSON"):
         Recording.load(copy)
 
 

@@ -7,10 +7,13 @@ import threading
 
 import pytest
 
+from link_support import serving
+from simmer.errors import WrongThread
 from simmer.protocol import Decoded
 from simmer.runner import Runner
 from simmer.transport import BusClosed, CommandBus
 from simmer.world import Simulation
+from simmer.world.events import CommandEvent, Event
 
 
 @pytest.fixture
@@ -19,12 +22,14 @@ def runner() -> Runner:
 
 
 def test_serve_answers_queued_messages_in_order(runner: Runner) -> None:
+    seen: list[Event] = []
+    runner.sim.add_observer(seen.append)
     first = runner.bus.submit("w0-6", "a")
     second = runner.bus.submit("w0-6", "b")
     assert runner.serve() == 2
     assert first.result() == [math.inf]
     assert second.result()[0] != second.result()[0]  # NaN: a drive is busy
-    assert [e.client for e in runner.history] == ["a", "b"]
+    assert [e.client for e in seen if isinstance(e, CommandEvent)] == ["a", "b"]
 
 
 def test_undecodable_message_gets_nan_per_command(runner: Runner) -> None:
@@ -87,3 +92,12 @@ def test_clients_are_listed() -> None:
     assert Runner(Simulation.from_config(), bus=bus).clients == ["stream 1"]
     bus.disconnect("stream 1")
     assert bus.clients == []
+
+
+def test_only_the_loop_thread_may_drive_a_served_simulation() -> None:
+    sim = Simulation.from_config()
+    with serving(sim):
+        for drive in (lambda: sim.command("u0"), sim.step, sim.reset, sim.run_until_idle):
+            with pytest.raises(WrongThread, match="belongs to the thread running its loop"):
+                drive()
+    assert sim.command("u1") == [pytest.approx(3.5)]  # the loop has ended: anyone may again

@@ -16,7 +16,7 @@ import pytest
 
 from link_support import read_frame, serving, two_port_send
 from simmer.protocol import MAX_MESSAGE_BYTES
-from simmer.transport import Link
+from simmer.transport import Transports
 
 from helpers import LAB_SEQUENCE, default_data, make_sim
 
@@ -34,7 +34,7 @@ def stream(link_port: int) -> socket.socket:
     return sock
 
 
-def wait_idle_two_port(link: Link, width: int) -> None:
+def wait_idle_two_port(link: Transports, width: int) -> None:
     while not math.isinf(two_port_send(link, b"w0-0", width)[0]):
         time.sleep(0.005)
 

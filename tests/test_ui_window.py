@@ -23,7 +23,7 @@ from simmer import Simulation
 from simmer.client import connect
 from simmer.geometry import Pose
 from simmer.runner import Runner
-from simmer.transport import Link
+from simmer.transport import Transports
 from simmer.ui import Bridge, Window, run_window
 from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
@@ -425,7 +425,7 @@ def serve_with_window(
 ) -> threading.Thread:
     """Serve the persistent protocol and run ``window`` (this thread) with ``runner`` (its own
     thread) while ``program(port)`` runs in a third; tear everything down; return that thread."""
-    link = Link(runner.bus, runner.sim.config, port_rx=0, port_tx=0, stream_port=0)
+    link = Transports(runner.bus, runner.sim.config, port_rx=0, port_tx=0, stream_port=0)
     with link:
         thread = threading.Thread(target=program, args=(link.stream.port,))
         thread.start()

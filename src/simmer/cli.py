@@ -6,9 +6,10 @@ import contextlib
 import errno
 import logging
 import os
+from collections.abc import Iterator
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.console import Console
@@ -77,6 +78,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help as written: [u0] stays, no boxes, no <bool>
 )
+_AS_COMMAND: list[bool] = []
+"""Holds True when this process is the ``simmer`` command (:func:`main`), not a program that
+calls the app (a test): only then does ``run --program`` make it a subreaper."""
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
@@ -198,21 +202,44 @@ def check(
     from simmer.config import load_config, summarize
     from simmer.config.loader import placed_issues
 
-    try:
-        loaded = load_config(config)
-    except ConfigError as exc:
-        _report_config_error(exc)
-        raise typer.Exit(1) from None
-    _report_config_warnings(loaded)
-    if loaded.origin:
-        out.print(loaded.origin, markup=False)
-    from simmer.config.probe import probe_devices
+    with _exit_refused():
+        try:
+            loaded = load_config(config)
+        except ConfigError as exc:
+            _report_config_error(exc)
+            raise typer.Exit(1) from None
+        _report_config_warnings(loaded)
+        if loaded.origin:
+            out.print(loaded.origin, markup=False)
+        from simmer.config.probe import probe_devices
 
-    if issues := probe_devices(loaded):
+        issues = probe_devices(loaded)
+    if issues:
         _report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
+
+
+class ExitCalled(SystemExit):
+    """``os._exit`` called by a plug-in or a device while ``simmer check`` runs it."""
+
+
+@contextlib.contextmanager
+def _exit_refused() -> Iterator[None]:
+    """Within ``with``: ``os._exit(n)`` raises :class:`ExitCalled` (a ``SystemExit``, which
+    check reports as a plug-in's or device's problem) instead of ending the process with no
+    word: the code ``check`` imports and calls is the user's."""
+    real = os._exit
+
+    def refused(status: int) -> NoReturn:
+        raise ExitCalled(f"os._exit({status}) was called")
+
+    os._exit = refused
+    try:
+        yield
+    finally:
+        os._exit = real
 
 
 @app.command(
@@ -392,6 +419,7 @@ def run(
             help="Project: where the robot starts: a cell 'row,col' or 'row,col,heading', "
             "'random' (a start cell drawn from the seed), 'open' or 'config'.",
             show_default=False,
+            metavar="CELL",
         ),
     ] = None,
     block: Annotated[
@@ -400,6 +428,7 @@ def run(
             help="Project: the block's centre 'x,y' in inches, 'random' (inside the loading "
             "zone, drawn from the seed) or 'config'.",
             show_default=False,
+            metavar="X,Y",
         ),
     ] = None,
     target: Annotated[
@@ -407,6 +436,7 @@ def run(
         typer.Option(
             help="Project: the drop-off zone to deliver to (e.g. B2), or 'random'.",
             show_default=False,
+            metavar="ZONE",
         ),
     ] = None,
     answer: Annotated[
@@ -415,8 +445,17 @@ def run(
             help='What --program reads at its input() prompt (e.g. the target zone, "B2"); '
             "'{target}' is replaced by this run's target.",
             show_default=False,
+            metavar="TEXT",
         ),
     ] = None,
+    record_limit: Annotated[
+        float,
+        typer.Option(
+            help="Megabytes events.jsonl and trace.csv of --record may hold together; past it "
+            "the recording stops and the run goes on.",
+            min=1,
+        ),
+    ] = 256,
 ) -> None:
     """Run the simulator on CONFIG (default: the built-in lab maze and rover).
 
@@ -496,6 +535,11 @@ def run(
         except OSError as exc:
             err.print(f"cannot record into {record}: {exc}", style="bold red", markup=False)
             raise typer.Exit(1) from None
+        seconds, timeout = _recorded_run_limits(seconds, timeout, program)
+    if program is not None and _AS_COMMAND:  # its detached children stay in sight
+        from simmer.proctree import adopt_orphans  # (not when embedded: simmer.proctree)
+
+        adopt_orphans()
     log_file = _log_to_file() if program is not None else None
     if log_file is not None:
         out.print(f"the simulator's log goes to {log_file}", markup=False)
@@ -518,6 +562,7 @@ def run(
             record=record,
             video=video,
             answer=answer,
+            record_limit=int(record_limit * 2**20),
         )
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
@@ -526,7 +571,9 @@ def run(
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(served.outcome.report().summary(), markup=False)
-    if record is not None:
+    if served.recording_stopped is not None:
+        err.print(served.recording_stopped, style="bold red", markup=False)
+    elif record is not None:
         out.print(f"recorded in {record}; the report is {record / 'report.md'}", markup=False)
     if program is not None:
         if served.ended_by == "program":
@@ -558,6 +605,30 @@ def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
             where = f"--{part}" if part in given else issue.key
             err.print(f"{where}: {issue.message}", style="bold red", markup=False)
         raise typer.Exit(1) from None
+
+
+def _recorded_run_limits(
+    seconds: float | None, timeout: float | None, program: str | None
+) -> tuple[float, float | None]:
+    """A recorded run's limits: ``--seconds`` (default: an hour of simulated time) and, with
+    a program, ``--timeout`` (default: an hour of wall time), so that a program that sleeps or
+    hangs forever does not record forever."""
+    from simmer.record.runfolder import MAX_RUN_SECONDS
+
+    if seconds is None:
+        seconds = MAX_RUN_SECONDS
+        out.print(
+            f"a recorded run stops at {seconds:g} s of simulated time (--seconds changes it)",
+            markup=False,
+        )
+    if program is not None and timeout is None:
+        timeout = MAX_RUN_SECONDS
+        out.print(
+            f"a recorded program is stopped after {timeout:g} s of wall time "
+            "(--timeout changes it)",
+            markup=False,
+        )
+    return seconds, timeout
 
 
 def _check_video(path: Path, *, force: bool) -> None:
@@ -757,15 +828,52 @@ def plot(folder: RunFolder) -> None:
         out.print(f"wrote {path}", markup=False)
 
 
-def _load_recording(folder: Path) -> Recording:
+TrustOption = Annotated[
+    bool,
+    typer.Option(
+        "--trust",
+        help="Import the plug-ins the run was recorded with (their code runs): only for a "
+        "folder from someone you trust. Without it, a run with plug-ins is not re-simulated.",
+    ),
+]
+PluginOption = Annotated[
+    list[Path] | None,
+    typer.Option(
+        "--plugin",
+        help="Re-simulate with this plug-in file (your own copy) instead of the ones the run "
+        "names; repeat for each.",
+        show_default=False,
+    ),
+]
+MaxSecondsOption = Annotated[
+    float | None,
+    typer.Option(
+        "--max-seconds",
+        help="Re-simulate at most this many simulated seconds (default: 3600); a folder whose "
+        "events go further is refused.",
+        min=0,
+        show_default=False,
+    ),
+]
+
+
+def _load_recording(
+    folder: Path, trust: bool, plugins: list[Path] | None, max_seconds: float | None
+) -> Recording:
     """Re-simulate a run folder, saying whether it matches its recording; exit status 1 with
     one line if it cannot be replayed."""
     from simmer.errors import ReplayError
+    from simmer.record.runfolder import MAX_RUN_SECONDS
     from simmer.ui.replay_model import Recording
 
     out.print(f"re-simulating the run in {folder} ...", markup=False)
     try:
-        recording = Recording.load(folder)
+        recording = Recording.load(
+            folder,
+            trust=trust,
+            plugins=plugins or None,
+            max_seconds=MAX_RUN_SECONDS if max_seconds is None else max_seconds,
+        )
     except ReplayError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
@@ -793,12 +901,15 @@ def replay(
             "status 1 if they differ.",
         ),
     ] = False,
+    trust: TrustOption = False,
+    plugin: PluginOption = None,
+    max_seconds: MaxSecondsOption = None,
 ) -> None:
     """Replay a recorded run in a window: play, pause, speed, a timeline to drag, the commands
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
     if not)."""
-    recording = _load_recording(folder)
+    recording = _load_recording(folder, trust, plugin, max_seconds)
     if check:
         raise typer.Exit(0 if recording.check.matches else 1)
     from simmer.errors import SimmerError
@@ -846,13 +957,16 @@ def render(
             metavar="SECONDS",
         ),
     ] = None,
+    trust: TrustOption = False,
+    plugin: PluginOption = None,
+    max_seconds: MaxSecondsOption = None,
 ) -> None:
     """Cut a clip of a recorded run into a video: what the window shows (with the path driven
     so far), at 30 frames per simulated second, drawn without a display."""
     from simmer.errors import ReplayError
     from simmer.ui.clip import write_clip
 
-    recording = _load_recording(folder)
+    recording = _load_recording(folder, trust, plugin, max_seconds)
     path = output if output is not None else folder / "replay.mp4"
     try:
         frames = write_clip(recording, path, start, end)
@@ -940,9 +1054,16 @@ def sweep(
     except (FileExistsError, ValueError) as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
-    except KeyboardInterrupt:
-        err.print(f"stopped; finished runs are in {folder / 'results.csv'} (--resume goes on)")
-        raise typer.Exit(130) from None
+    except KeyboardInterrupt as exc:
+        import signal
+
+        signum = getattr(exc, "signum", signal.SIGINT)
+        err.print(
+            f"stopped ({signal.Signals(signum).name}); the workers and their programs are "
+            f"stopped; finished runs are in {folder / 'results.csv'} (--resume goes on)",
+            markup=False,
+        )
+        raise typer.Exit(128 + signum) from None
     out.print(
         f"{done.successes}/{done.runs} succeeded ({done.ran} run now, {done.wall_time:.1f} s); "
         f"wrote {folder / 'results.csv'} and {folder / 'summary.md'}",
@@ -1006,4 +1127,5 @@ def console(
 def main() -> None:
     """Entry point of the ``simmer`` console script."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    _AS_COMMAND.append(True)
     app()

@@ -44,6 +44,11 @@ class ConfigError(SimmerError):
         return "\n".join(issue.render(self.source) for issue in self.issues)
 
 
+class WrongThread(SimmerError):
+    """A simulation was driven from a thread other than the one running its loop (transports
+    and windows hand their commands to the loop instead)."""
+
+
 class DeviceKindError(SimmerError):
     """A device kind is registered twice, unknown, or does not honour the device interface."""
 

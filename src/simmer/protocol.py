@@ -30,7 +30,7 @@ import math
 import re
 import struct
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar, Protocol
 
 STOP_ID = "xx"
@@ -226,17 +226,20 @@ def _not_text(exc: UnicodeDecodeError, encoding: str) -> str:
     return f"not {encoding} text ({exc.reason} at byte {exc.start})"
 
 
-def decode_message(data: bytes, encoding: str = "utf-8") -> Decoded:
+def decode_message(
+    data: bytes, encoding: str = "utf-8", *, size: int = 0, clock: bool = False
+) -> Decoded:
     """Decode the bytes of one message (line ending already removed, or not); the limits are
-    checked before anything else is done with it."""
+    checked before anything else is done with it. ``size`` and ``clock`` go into the result
+    (:attr:`Decoded.size`, :attr:`Decoded.clock`)."""
     count = data.count(b",") + 1
     if (refused := over_limit(len(data), count)) is not None:
-        return refused
+        return replace(refused, size=size)
     try:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
-        return Decoded(None, count, _not_text(exc, encoding))
-    return Decoded(text.rstrip("\r\n"), count)
+        return Decoded(None, count, _not_text(exc, encoding), size=size, clock=clock)
+    return Decoded(text.rstrip("\r\n"), count, size=size, clock=clock)
 
 
 def pack_replies(values: Sequence[float], width: int = 4) -> bytes:
@@ -307,6 +310,10 @@ class ReplyCodec(Protocol):
         """The replies to several messages as one packet (``b""``: nothing to send)."""
         ...
 
+    def describe(self) -> str:
+        """What the replies look like, for the start-up lines (``as packed 4-byte floats``)."""
+        ...
+
 
 @dataclass(frozen=True)
 class PackedCodec:
@@ -327,6 +334,10 @@ class PackedCodec:
     def encode_many(self, answered: Sequence[Replies]) -> bytes:
         """Every message's values packed, one after another."""
         return b"".join(self.encode(decoded, values) for decoded, values in answered)
+
+    def describe(self) -> str:
+        """``as packed 4-byte floats`` (or 8-byte doubles)."""
+        return f"as packed {'8-byte doubles' if self.width == 8 else '4-byte floats'}"
 
 
 def unwrap_frames(text: str, start: str = "[", end: str = "]") -> str | None:
@@ -403,6 +414,14 @@ class FramedCodec:
             return b""
         text = f"{self.start}{','.join(entries)}{self.end}"
         return text.encode(self.encoding, errors="replace")
+
+    def describe(self) -> str:
+        """``in SimMeR v1.2 framed text ([u0] -> [u0:15.45], 3 decimals)``."""
+        start, end = self.start, self.end
+        return (
+            f"in SimMeR v1.2 framed text ({start}u0{end} -> {start}u0:15.45{end}, "
+            f"{self.round_digits} decimals)"
+        )
 
     def entry(self, device_id: str, value: float) -> str:
         """One reply entry, ``id:value``."""

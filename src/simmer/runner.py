@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 from simmer.localize.messages import Localization
 from simmer.lockstep import FREE_TIME_READS
-from simmer.protocol import ClockMessage, parse_clock, printable
+from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
@@ -130,16 +130,6 @@ class _Held:
     deadline: float
 
 
-@dataclass(frozen=True)
-class Exchange:
-    """One answered message, for the HUD: when, from whom, what was asked and answered."""
-
-    time: float
-    client: str
-    message: str
-    replies: tuple[float, ...]
-
-
 class Runner:
     """Drive a simulation in real time (or faster) and serve the bus; see the module doc."""
 
@@ -149,14 +139,12 @@ class Runner:
         *,
         speed: float | None = 1.0,
         bus: CommandBus | None = None,
-        history: int = 20,
         lockstep: bool = False,
         link_delay: float | None = None,
     ) -> None:
         self.sim = sim
         self.bus = bus if bus is not None else CommandBus()
         self._paused = False
-        self.history: deque[Exchange] = deque(maxlen=history)
         self._speed: float | None = None
         self._reschedule = True
         self.speed = speed
@@ -234,13 +222,10 @@ class Runner:
             self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
             request.reasons.append(error)
             replies = [math.nan] * decoded.count
-            message = f"<{decoded.error}>"
         else:
             records: list[tuple[int, str]] = []
             replies = self.sim.command(decoded.text, records, request.client)
-            message = decoded.text
             self._report(printable(request.client), records, request.reasons)
-        self.history.append(Exchange(self.sim.time, request.client, message, tuple(replies)))
         request.future.set_result(replies)
         return replies
 
@@ -449,6 +434,18 @@ class Runner:
         simulation in the program's order; in real time it steps on the wall clock and answers
         every request between two steps.
         """
+        self.sim.own(threading.get_ident())
+        try:
+            self._run(on_frame, stop_event, until)
+        finally:
+            self.sim.own(None)
+
+    def _run(
+        self,
+        on_frame: FrameCallback | None,
+        stop_event: threading.Event | None,
+        until: float | None,
+    ) -> None:
         sim = self.sim
         lockstep = self.lockstep
         next_step = next_frame = time.monotonic()
@@ -482,3 +479,43 @@ class Runner:
                 self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))
             else:
                 self.serve(min(next_step - now, wake - now, MAX_WAIT))
+
+
+class LocalLink:
+    """A client link to a simulation in this process, on the lockstep clock (no sockets):
+    messages go straight to a lockstep :class:`Runner` of ``sim`` in this thread.
+
+    ``Client(LocalLink(sim), lockstep=True)`` gives a control program written against
+    :mod:`simmer.client` the same run it gets from ``simmer run --program``: each message
+    costs the link delay, ``sleep`` and ``wait_idle`` advance the clock, all through the same
+    :class:`Runner` code. Sweeps, tests and notebooks use it to run a program without a
+    server.
+    """
+
+    last_text: str | None = None
+
+    def __init__(self, sim: Simulation, link_delay: float | None = None) -> None:
+        self.runner = Runner(sim, speed=None, lockstep=True, link_delay=link_delay)
+
+    def exchange(self, message: str) -> list[float]:
+        """Execute one message (or clock message) and let the time it costs pass."""
+        clock = message.encode("utf-8").startswith(CLOCK_PREFIX)
+        request = Request(Decoded(message, message.count(",") + 1, clock=clock), "local")
+        self.runner.handle(request)
+        self.runner.catch_up()
+        return request.future.result()
+
+    def ask(self, message: str) -> tuple[list[float], str | None]:
+        """A localization message (``%maze``, ``%show``, ``%pose``): its values, or its text;
+        it costs no simulated time."""
+        request = Request(Decoded(message, 1, meta=True), "local")
+        self.runner.handle(request)
+        return request.future.result(), (request.answer[0] if request.answer else None)
+
+    def clock(self, message: str) -> float:
+        """Send a clock message; the simulated time after it."""
+        (value,) = self.exchange(message)
+        return value
+
+    def close(self) -> None:
+        """Nothing to release."""

@@ -22,9 +22,11 @@ from simmer.lockstep import (
     program_environment,
     runs_python,
 )
+from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder, RunSetup
+from simmer.record.eventlog import MAX_RECORDING_BYTES
 from simmer.runner import Runner
-from simmer.transport import STREAM_PORT, Link
+from simmer.transport import STREAM_PORT, Transports
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
@@ -96,6 +98,8 @@ class Served:
     program_status: int | None = None
     """The control program's exit status, if it ended the run."""
     program_started: bool = False
+    recording_stopped: str | None = None
+    """Why the recording stopped before the run ended (a full disk, its size limit), if it did."""
 
     @property
     def exit_status(self) -> int:
@@ -131,6 +135,7 @@ def serve(
     record: Path | None = None,
     video: Path | None = None,
     answer: str | None = None,
+    record_limit: int = MAX_RECORDING_BYTES,
 ) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -139,8 +144,11 @@ def serve(
     (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
-    with a window or headless, and the file is finished however the run ends. With ``answer``,
-    the program's standard input is that text, a line, then its end (what a student types at
+    with a window or headless, and the file is finished however the run ends. A recording
+    that reaches ``record_limit`` bytes or fills the disk stops (the run goes on), and
+    :attr:`Served.recording_stopped` says so. When the run ends, every process the program
+    started is stopped, however it detached (:mod:`simmer.proctree`). With ``answer``, the
+    program's standard input is that text, a line, then its end (what a student types at
     the program's ``input()`` prompt: the project's target zone).
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
@@ -153,12 +161,13 @@ def serve(
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
+    before: set[int] = set()
     signalled: list[str] = []
     restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
     try:
-        link = Link(
+        transports = Transports(
             runner.bus,
             sim.config,
             host=host,
@@ -169,19 +178,21 @@ def serve(
             serial_link=serial_link,
             lockstep=lockstep,
         )
-        with link:
+        with transports:
             if record is not None:
                 clock = "lockstep" if lockstep else "realtime"
                 delay = runner.link_delay if lockstep else None
                 setup = RunSetup(clock, speed, delay, program, window)
-                recorder = RunRecorder(sim, record, setup, outcome)
+                recorder = RunRecorder(
+                    sim, record, setup, outcome, max_bytes=record_limit, on_stop=_say(echo)
+                )
                 echo(f"recording the run into {record}")
             if video is not None:
                 from simmer.ui.video import VideoRecorder
 
                 filming = VideoRecorder(sim, video, controls=runner)
                 echo(f"recording a video into {video}")
-            for line in link.describe():
+            for line in transports.describe():
                 echo(line)
             if lockstep:
                 echo(
@@ -191,8 +202,9 @@ def serve(
                 if program is not None and not runs_python(program):
                     echo(NOT_PYTHON.format(command=program))
             if program is not None:
+                before = descendants()
                 started = _start_program(
-                    program, link, sim.config, runner.bus, stop, ended, timeout, echo, answer
+                    program, transports, sim.config, runner.bus, stop, ended, timeout, echo, answer
                 )
                 sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
             if window:
@@ -220,6 +232,7 @@ def serve(
         runner.bus.close()
         if started is not None:
             started.stop()
+            stop_strays(before)
         if filming is not None:
             _finish_video(filming, echo)
         restore_signals()
@@ -229,7 +242,18 @@ def serve(
     served = Served(runner, outcome, ended[0], status, program_started=started is not None)
     if recorder is not None:
         recorder.close(served.ended_by, status)
+        served.recording_stopped = recorder.stopped
     return served
+
+
+def _say(echo: Callable[[str], None]) -> Callable[[str], None]:
+    """Say a recording stopped, in the log and where the run's messages go."""
+
+    def say(line: str) -> None:
+        log.error("%s; the run goes on", line)
+        echo(f"{line}; the run goes on")
+
+    return say
 
 
 def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
@@ -245,7 +269,7 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 
 def _start_program(
     command: str,
-    link: Link,
+    transports: Transports,
     config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
@@ -257,15 +281,15 @@ def _start_program(
     """Start the control program on this run's ports; a thread ends the run when it exits or
     at the wall-clock ``timeout`` (then stopping its whole process tree)."""
     ports = {
-        "port_rx": link.two_port.port_rx,
-        "port_tx": link.two_port.port_tx,
-        "stream": link.stream.port,
+        "port_rx": transports.two_port.port_rx,
+        "port_tx": transports.two_port.port_tx,
+        "stream": transports.stream.port,
     }
     settings = config.settings
     configured = {"port_rx": settings.port_rx, "port_tx": settings.port_tx}
-    env = program_environment(ports, link.host, configured=configured)
-    if link.serial is not None:
-        env["SIMMER_SERIAL"] = str(link.serial.link or link.serial.path)
+    env = program_environment(ports, transports.host, configured=configured)
+    if transports.serial is not None:
+        env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
     program = Program.start(command, env, answer)
     echo(f"started the program: {command}")
 

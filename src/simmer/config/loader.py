@@ -16,7 +16,7 @@ from typing import Any
 from pydantic import BaseModel
 
 from simmer.config import simmer_py
-from simmer.config.models import DEVICE_GROUPS, Settings, SimConfig
+from simmer.config.models import DEVICE_GROUPS, SimConfig
 from simmer.config.toml_errors import toml_issue, with_lines
 from simmer.config.validate import ORIGINAL_RUNS, config_from_dict
 from simmer.errors import ConfigError, ConfigIssue
@@ -24,7 +24,7 @@ from simmer.errors import ConfigError, ConfigIssue
 BUILTIN_SOURCE = "<built-in default>"
 MAX_FILE_BYTES = 1_000_000
 """Largest configuration file read: the lab's are 3 kB, and the walls of the largest maze
-allowed (200 x 200 cells) take 120 kB; a larger file is the wrong file, and reading it would
+allowed (500 x 500 cells) take 750 kB; a larger file is the wrong file, and reading it would
 take minutes and gigabytes."""
 
 __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here for older imports
@@ -35,7 +35,6 @@ __all__ = [  # config_from_dict and ORIGINAL_RUNS live in validate; named here f
     "config_from_toml",
     "default_config",
     "describe_noise",
-    "describe_replies",
     "load_config",
     "noisy_devices",
     "placed_issues",
@@ -74,6 +73,17 @@ def read_config_data(path: str | Path) -> tuple[dict[str, Any], bool]:
 def _checked_file(path: str | Path) -> Path:
     """``path``, if it is a file small enough to be a configuration (else a ConfigError)."""
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise ConfigError(
+            path,
+            [
+                ConfigIssue(
+                    "",
+                    "is not a regular file (a folder, a device or a pipe); give a "
+                    "configuration file (.toml or config.py)",
+                )
+            ],
+        )
     if not path.is_file():
         raise ConfigError(
             path, [ConfigIssue("", "no such file; check the path (run `simmer check FILE`)")]
@@ -86,7 +96,7 @@ def _checked_file(path: str | Path) -> Path:
                 ConfigIssue(
                     "",
                     f"is {size:,} bytes, more than any configuration ({MAX_FILE_BYTES:,} at "
-                    "most: even a 200 x 200 maze takes 120,000); is this the right file?",
+                    "most: even a 500 x 500 maze takes 750,000); is this the right file?",
                 )
             ],
         )
@@ -194,7 +204,7 @@ def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True)
         f"Robot starting {start} "
         f"with {', '.join(parts)}. "
         f"Noise: {describe_noise(config, seed)}. {s.frame_rate:g} steps/s{served}, replies "
-        f"{describe_replies(s)}." + _project(config)
+        f"{config.reply_codec().describe()}." + _project(config)
     )
 
 
@@ -241,15 +251,3 @@ def _project(config: SimConfig) -> str:
         return ""
     target = "drawn from the seed" if s.scenario.target == "random" else s.scenario.target
     return f" {Zones.from_settings(s).describe()} Target zone: {target}."
-
-
-def describe_replies(settings: Settings) -> str:
-    """What the two-port scheme and the serial port answer, for the start-up lines."""
-    if settings.protocol == "framed":
-        start, end = settings.frame_start, settings.frame_end
-        return (
-            f"in SimMeR v1.2 framed text ({start}u0{end} -> {start}u0:15.45{end}, "
-            f"{settings.round_digits} decimals)"
-        )
-    kind = "8-byte doubles" if settings.reply_bytes == 8 else "4-byte floats"
-    return f"as packed {kind}"

@@ -196,7 +196,9 @@ def _describe_plugin_error(entry: str, exc: Exception | SystemExit) -> str:
             break
     what = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
     if isinstance(exc, SystemExit):
-        what += "; a plug-in may not end the program: remove its sys.exit() or exit() call"
+        what += (
+            "; a plug-in may not end the program: remove its sys.exit(), exit() or os._exit() call"
+        )
     return f"importing {entry} failed{where}: {what}"
 
 
@@ -376,6 +378,12 @@ def _kind_list(category: str) -> str:
 
 
 # ----------------------------------------------------------------------------- cross checks
+
+
+def maze_issues(settings: Settings) -> list[ConfigIssue]:
+    """What is wrong with the maze of settings validated already (its shape, its sizes), for
+    a tool that draws a recorded maze without its devices (``simmer plot``)."""
+    return _check_walls(settings) or _check_sizes(settings)
 
 
 def _check_walls(settings: Settings) -> list[ConfigIssue]:

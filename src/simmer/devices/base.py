@@ -19,17 +19,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, Protocol
+from typing import Annotated, Any, ClassVar, Literal, Protocol
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from pydantic_core import PydanticCustomError
 
-from simmer.geometry import FloatArray, Pose, Vec2, rectangle
-
-if TYPE_CHECKING:
-    from simmer.world.maze import Block, Maze
-    from simmer.world.robot import Robot
+from simmer.geometry import BoolArray, FloatArray, Pose, Vec2, rectangle
 
 Category = Literal["motor", "drive", "sensor"]
 
@@ -99,8 +95,71 @@ class DeviceParams(BaseModel):
         return []
 
 
+class MazeView(Protocol):
+    """The maze as a device sees it (:class:`simmer.world.maze.Maze` is one): cells of side
+    ``cell`` in, ``cells`` as the configuration's walls matrix (0: solid), wall lines
+    ``hwall``/``vwall``, ``segments`` (rows of x1, y1, x2, y2) and the floor's tiles of side
+    ``tile`` (``floor_white[row, column]``)."""
+
+    cells: tuple[tuple[int, ...], ...]
+    cell: float
+    tile: float
+    hwall: BoolArray
+    vwall: BoolArray
+    segments: FloatArray
+    floor_white: BoolArray
+
+    def cast_ray(self, x: float, y: float, heading: float, limit: float = math.inf) -> float:
+        """Distance from (x, y) along ``heading`` to the first wall (inf if beyond ``limit``)."""
+        ...
+
+
+class BlockView(Protocol):
+    """The block as a device sees it (:class:`simmer.world.maze.Block` is one): its centre,
+    rotation and side, its outline ``segments``, and whether a gripper holds it."""
+
+    x: float
+    y: float
+    rotation: float
+    size: float
+    segments: FloatArray
+    held: Pose | None
+
+    def cast_ray(self, x: float, y: float, heading: float) -> float:
+        """Distance from (x, y) along ``heading`` to the block's outline; inf if it misses."""
+        ...
+
+    def hold(self, robot: Pose) -> None:
+        """A gripper of the robot at ``robot`` has closed on the block."""
+        ...
+
+    def release(self) -> None:
+        """The gripper has let it go where it is."""
+        ...
+
+
+class RobotView(Protocol):
+    """The robot as a device sees it (:class:`simmer.world.robot.Robot` is one)."""
+
+    pose: Pose
+    turned: float
+    """Degrees turned during the last step (what a gyroscope senses)."""
+    height: float
+    outline: FloatArray
+    devices: dict[str, Device]
+    motors: dict[str, Any]
+    drives: dict[str, Any]
+    sensors: dict[str, Device]
+
+    @property
+    def any_drive_moving(self) -> bool:
+        """True while any drive still has commanded motion left."""
+        ...
+
+
 class World(Protocol):
-    """What a device may look at when it simulates: the simulation implements this."""
+    """What a device may look at when it simulates: the simulation implements this. Devices
+    see the world only through these small views, so they never import it."""
 
     @property
     def time(self) -> float:
@@ -113,17 +172,17 @@ class World(Protocol):
         ...
 
     @property
-    def maze(self) -> Maze:
+    def maze(self) -> MazeView:
         """The maze: walls and floor."""
         ...
 
     @property
-    def block(self) -> Block:
+    def block(self) -> BlockView:
         """The block."""
         ...
 
     @property
-    def robot(self) -> Robot:
+    def robot(self) -> RobotView:
         """The robot the device is mounted on."""
         ...
 

@@ -154,11 +154,6 @@ class Drive(Device):
             return 0.0
         return scale * direction / cos_a
 
-    @property
-    def moving(self) -> bool:
-        """True while commanded motion remains."""
-        return self.remaining != 0.0
-
     def set_bias(self, bias: Axes) -> None:
         """Replace the bias (used when ``rand_bias`` draws one at start)."""
         self.bias = bias

@@ -18,9 +18,12 @@ replay knows where the run stopped.
 
 from __future__ import annotations
 
+import errno
 import json
 import math
+import os
 from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import fields
 from functools import lru_cache
 from pathlib import Path
@@ -59,6 +62,52 @@ TYPE_NAMES: dict[type[Event], str] = {
 EVENT_TYPES = {name: cls for cls, name in TYPE_NAMES.items()}
 NOT_FINITE = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf}
 """How a float that JSON cannot hold is written, and what it reads back as."""
+MAX_RECORDING_BYTES = 256 * 1024 * 1024
+"""Bytes a recording's ``events.jsonl`` and ``trace.csv`` hold together (and the most of either
+that is read back). An hour of a lockstep program sending a message every step is some 30 MB;
+past the limit the recording stops (the run goes on) rather than fill the disk, and a replay
+reads no file larger."""
+
+
+class RecordingBudget:
+    """Bytes a recording's files may still take (:data:`MAX_RECORDING_BYTES` unless told), shared
+    by its writers; :meth:`take` says whether a write fits."""
+
+    def __init__(self, limit: int = MAX_RECORDING_BYTES) -> None:
+        self.limit = limit
+        self.used = 0
+
+    def take(self, size: int) -> bool:
+        """Count ``size`` more bytes if they fit (True), else nothing (False)."""
+        if self.used + size > self.limit:
+            return False
+        self.used += size
+        return True
+
+    def why(self) -> str:
+        """Why the recording stopped, naming the limit and how to raise it."""
+        return (
+            f"it reached the size limit of {self.limit / 2**20:,.0f} MB "
+            "(events.jsonl and trace.csv together; --record-limit MB raises it)"
+        )
+
+
+def check_size(path: Path) -> None:
+    """ValueError naming ``path`` if it is larger than a recording's files hold
+    (:data:`MAX_RECORDING_BYTES`): a reader refuses it rather than read it whole."""
+    size = path.stat().st_size
+    if size > MAX_RECORDING_BYTES:
+        raise ValueError(
+            f"{path} is {size:,} bytes, more than a recording holds ({MAX_RECORDING_BYTES:,})"
+        )
+
+
+def stop_reason(exc: OSError) -> str:
+    """Why a write failed, in words for "the recording in DIR stopped: ..."."""
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        return "disk full"
+    return exc.strerror or str(exc)
+
 
 # ----------------------------------------------------------------------------- writing
 
@@ -163,7 +212,8 @@ _READERS = {
 
 def event_from_dict(data: dict[str, Any]) -> Event:
     """The event of one parsed line (ValueError if ``data`` is not one)."""
-    cls = EVENT_TYPES.get(data.get("type", ""))
+    kind = data.get("type", "")
+    cls = EVENT_TYPES.get(kind) if isinstance(kind, str) else None
     if cls is None:
         raise ValueError(f"unknown event type {data.get('type')!r}")
     readers = _READERS[cls]
@@ -174,36 +224,74 @@ def event_from_dict(data: dict[str, Any]) -> Event:
         raise ValueError(f"not a {data['type']} event: {exc}") from None
 
 
-def read_events(path: str | Path) -> list[Event]:
+def read_events(path: str | Path, max_steps: int | None = None) -> list[Event]:
     """Every event in an ``events.jsonl`` file, in order.
 
     A last line cut off before its newline (the disk filled, the machine lost power) is left
-    out; any other line that is not an event is a ValueError naming its line number.
+    out; any other line that is not an event is a ValueError naming its line number, as is an
+    event that would take a replay past ``max_steps`` steps (counted on across resets), and a
+    file larger than :data:`MAX_RECORDING_BYTES`.
     """
+    path = Path(path)
+    check_size(path)
     events: list[Event] = []
-    with Path(path).open(encoding="utf-8") as file:
+    before = 0
+    """Steps of the parts of the run before the last reset."""
+    with path.open(encoding="utf-8", errors="strict") as file:
         for number, line in enumerate(file, 1):
             try:
-                events.append(event_from_dict(json.loads(line)))
-            except ValueError as exc:  # json.JSONDecodeError is one
+                event = event_from_dict(_object(json.loads(line)))
+                if event.step < 0:
+                    raise ValueError(f"step {event.step} is negative")
+            except (ValueError, RecursionError) as exc:  # json.JSONDecodeError is a ValueError
                 if not line.endswith("\n"):
                     break
                 raise ValueError(f"{path} line {number}: {exc}") from None
+            if max_steps is not None and before + event.step > max_steps:
+                after = f" ({before + event.step:,} counting on across resets)" if before else ""
+                raise ValueError(
+                    f"{path} line {number}: step {event.step:,}{after} is beyond the replay "
+                    f"limit of {max_steps:,} steps (--max-seconds raises it)"
+                )
+            if isinstance(event, ResetEvent):
+                before += event.step
+            events.append(event)
     return events
+
+
+def _object(value: Any) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{type(value).__name__}, not a JSON object")
+    return value
 
 
 # ----------------------------------------------------------------------------- the observer
 
 
 class EventLog:
-    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc)."""
+    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc).
 
-    def __init__(self, path: str | Path) -> None:
+    The file takes its bytes from ``budget``. A write that does not fit, or fails (a full
+    disk), stops the log: the file is cut back to its last whole line, :attr:`stopped` says
+    why and ``on_stop`` is called with it; the run goes on unrecorded."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        budget: RecordingBudget | None = None,
+        on_stop: Callable[[str], None] | None = None,
+    ) -> None:
         self.path = Path(path)
         self._file = self.path.open("wb", buffering=0)
         self._send = self._file.write
         self._closed = False
         self._last_step: StepEvent | None = None
+        self._budget = budget or RecordingBudget()
+        self._on_stop = on_stop
+        self._size = 0
+        """Bytes of whole lines in the file."""
+        self.stopped: str | None = None
+        """Why the log stopped before the run ended (None: it did not)."""
         self.written = 0
         """Events written so far."""
 
@@ -212,24 +300,44 @@ class EventLog:
         if type(event) is StepEvent:
             self._last_step = event
             return
-        if self._closed:  # a simulation thread that outlived the run
+        if self._closed or self.stopped:  # a simulation thread that outlived the run
             return
         self._last_step = None
         self._write(event_line(event).encode("utf-8"))
 
     def _write(self, line: bytes) -> None:
         """One line, in one system call (more only if the system writes part of it)."""
-        done = self._send(line) or 0
-        while done < len(line):
-            done += self._send(line[done:]) or 0
+        if not self._budget.take(len(line)):
+            self.stop(self._budget.why())
+            return
+        try:
+            done = self._send(line) or 0
+            while done < len(line):
+                done += self._send(line[done:]) or 0
+        except OSError as exc:
+            self.stop(stop_reason(exc))
+            return
+        self._size += len(line)
         self.written += 1
+
+    def stop(self, reason: str) -> None:
+        """Write nothing more, cutting the file back to its last whole line (which needs no
+        space on a full disk), and say why (again: nothing)."""
+        if self.stopped is not None:
+            return
+        self.stopped = reason
+        with suppress(OSError, ValueError):  # ValueError: closed already
+            os.ftruncate(self._file.fileno(), self._size)
+        if self._on_stop is not None:
+            self._on_stop(reason)
 
     def close(self) -> None:
         """Write the run's last step if nothing came after it, and close the file (again:
         nothing)."""
         if self._closed:
             return
-        self._closed = True
-        if self._last_step is not None:
+        if self._last_step is not None and self.stopped is None:
             self._write(event_line(self._last_step).encode("utf-8"))
-        self._file.close()
+        self._closed = True
+        with suppress(OSError):
+            self._file.close()

@@ -7,8 +7,9 @@ What is read from a run folder (the names are the constants below):
   seconds), ``x``, ``y`` (inches) and ``heading`` (degrees) are required; ``step`` and
   ``collisions`` are known and not plotted; every other column whose cells are numbers (or blank
   before a sensor's first reading) is a sensor, plotted under its header (its id, e.g. ``u0``).
-  Rows that do not parse (the half-written last line of a killed run) are skipped. A reset puts
-  the simulated clock back to 0: where ``time`` goes backwards a new part of the run begins.
+  Rows that do not parse (the half-written last line of a killed run), or whose pose is beyond
+  :data:`MAX_POSE_VALUE`, are skipped. A reset puts the simulated clock back to 0: where
+  ``time`` goes backwards a new part of the run begins.
 - ``events.jsonl`` (optional): one JSON object per line with ``type``, ``time`` and more.
   ``command`` events (``message``, ``replies``: numbers, or the strings "nan", "inf", "-inf")
   are numbered from 1 along the path; ``collision`` events are marked at their ``pose``
@@ -102,6 +103,10 @@ MAX_PATH_LABELS = 30
 """About as many command labels at most along the path (more are spaced further apart)."""
 MAX_TIME_LABELS = 40
 """Command labels at most across the sensor plot's width."""
+MAX_POSE_VALUE = 1e9
+"""A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
+is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
+300 digits across the title."""
 
 
 class PlotError(SimmerError):
@@ -258,12 +263,15 @@ def read_run(folder: str | Path) -> RecordedRun:
 
 def _read_trace(path: Path) -> Trace:
     """The trace's columns; a new part wherever the clock goes back (a reset)."""
+    from simmer.record.eventlog import check_size
+
     try:
+        check_size(path)
         with path.open(newline="", encoding="utf-8") as file:
             reader = csv.reader(file)
             header = [name.strip() for name in next(reader, [])]
             rows = list(reader)
-    except (OSError, UnicodeError, csv.Error) as exc:
+    except (OSError, ValueError, csv.Error) as exc:  # a UnicodeError is a ValueError
         raise PlotError(f"cannot read {path}: {exc}") from None
     missing = [name for name in TRACE_REQUIRED if name not in header]
     if missing:
@@ -278,7 +286,7 @@ def _read_trace(path: Path) -> Trace:
             pose = [float(row[i]) for i in required]
         except ValueError:
             continue
-        if all(math.isfinite(v) for v in pose):
+        if all(abs(v) <= MAX_POSE_VALUE for v in pose):  # False for NaN too
             values.append((pose, row))
     if not values:
         raise PlotError(f"{path} has no rows of data: the run recorded nothing")
@@ -305,23 +313,21 @@ def _number(cell: str) -> float | None:
 
 def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
     """The run a manifest describes, with this trace (no events yet)."""
+    from simmer.record.runfolder import read_manifest
+
     if not path.is_file():
         raise PlotError(f"no {MANIFEST_FILE} in {path.parent}: the maze to draw is unknown")
     try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeError, ValueError) as exc:
+        manifest = read_manifest(path.parent)
+    except OSError as exc:
         raise PlotError(f"cannot read {path}: {exc}") from None
-    config = manifest.get(MANIFEST_CONFIG) if isinstance(manifest, dict) else None
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
+    config = manifest.get(MANIFEST_CONFIG)
     data = config.get(MANIFEST_SETTINGS) if isinstance(config, dict) else None
     if not isinstance(config, dict) or not isinstance(data, dict):
         raise PlotError(f"{path} has no {MANIFEST_CONFIG}.{MANIFEST_SETTINGS}: the maze is unknown")
-    known = {key: value for key, value in data.items() if key in Settings.model_fields}
-    try:
-        settings = Settings.model_validate(known)
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(part) for part in first["loc"])
-        raise PlotError(f"{path}: setting {where}: {first['msg']}") from None
+    settings = _settings(path, data)
     seed = manifest.get(MANIFEST_SEED)
     source = config.get(MANIFEST_SOURCE)
     devices = config.get(MANIFEST_DEVICES)
@@ -357,15 +363,50 @@ def _scenario(value: Any) -> RecordedScenario | None:
     return RecordedScenario((x, y, heading), (bx, by), target if isinstance(target, str) else None)
 
 
+def _settings(path: Path, data: dict[str, Any]) -> Settings:
+    """A manifest's settings, with the maze checked as a run's is (a 2000 x 2000 ``walls``
+    would take gigabytes to draw); PlotError naming the first problem."""
+    from simmer.config.validate import maze_issues, oversize_walls
+
+    known = {key: value for key, value in data.items() if key in Settings.model_fields}
+    issue = oversize_walls(known.get("walls"))
+    if issue is None:
+        try:
+            settings = Settings.model_validate(known)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            where = ".".join(str(part) for part in first["loc"])
+            raise PlotError(f"{path}: setting {where}: {first['msg']}") from None
+        issue = next(iter(maze_issues(settings)), None)
+        if issue is None:
+            return settings
+    raise PlotError(f"{path}: the recorded maze is not valid: {issue.key}: {issue.message}")
+
+
 def _read_events(path: Path, run: RecordedRun) -> None:
-    """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``."""
+    """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``;
+    PlotError for an event at a time no run of the limit reaches (:data:`MAX_RUN_SECONDS`
+    past the trace's end: a label there overflows the drawing)."""
+    from simmer.record.eventlog import check_size
+    from simmer.record.runfolder import MAX_RUN_SECONDS
+
+    try:
+        check_size(path)
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
+    latest = float(np.max(run.trace.time)) + MAX_RUN_SECONDS
     part = 0
-    for event in _json_lines(path):
+    for number, event in _json_lines(path):
         kind, time = event.get(EV_TYPE), _float(event.get(EV_TIME))
         if kind == EV_RESET:
             part += 1
         elif not math.isfinite(time):
             continue
+        elif not 0 <= time <= latest:
+            raise PlotError(
+                f"{path} line {number}: time {time:g} s is outside the run (its trace ends at "
+                f"{latest - MAX_RUN_SECONDS:g} s): not a recorded event"
+            )
         elif kind == EV_COMMAND:
             replies = event.get(EV_REPLIES)
             values = tuple(_float(r) for r in replies) if isinstance(replies, list) else ()
@@ -381,17 +422,18 @@ def _read_events(path: Path, run: RecordedRun) -> None:
                 run.estimates.append(Estimate(time, part, *errors(pose, truth)))
 
 
-def _json_lines(path: Path) -> Iterator[dict[str, Any]]:
-    """The JSON objects of a JSON-lines file, skipping lines that are not one."""
+def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
+    """The JSON objects of a JSON-lines file with their line numbers, skipping lines that are
+    not one."""
     try:
         with path.open(encoding="utf-8", errors="replace") as file:
-            for line in file:
+            for number, line in enumerate(file, 1):
                 try:
                     value = json.loads(line)
-                except ValueError:
+                except (ValueError, RecursionError):
                     continue
                 if isinstance(value, dict):
-                    yield value
+                    yield number, value
     except OSError as exc:
         raise PlotError(f"cannot read {path}: {exc}") from None
 
@@ -443,7 +485,11 @@ def plot_run(folder: str | Path) -> list[Path]:
         images.append(run.folder / LOCALIZATION_IMAGE)
         write_localization_plot(run, images[-1])
     if (run.folder / REPORT_JSON).is_file():
-        return [*images, write_report_md(run.folder)]
+        try:
+            return [*images, write_report_md(run.folder)]
+        except (OSError, ValueError) as exc:
+            drawn = " and ".join(image.name for image in images)
+            raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
     shown = [*IMAGES, LOCALIZATION_WORDS] if run.estimates else IMAGES
     return [*images, report] if link_from_report(report, shown) else images
 

@@ -26,6 +26,8 @@ import math
 import platform
 import sys
 import time
+from collections.abc import Callable, Sequence
+from contextlib import suppress
 from dataclasses import dataclass, replace
 from datetime import datetime
 from importlib.metadata import PackageNotFoundError, version
@@ -36,8 +38,15 @@ from typing import Any, NamedTuple
 import simmer
 from simmer.config.models import SimConfig
 from simmer.config.validate import config_from_dict
+from simmer.errors import ReplayError
 from simmer.geometry import Pose, wrap_degrees
-from simmer.record.eventlog import EventLog, read_events
+from simmer.record.eventlog import (
+    MAX_RECORDING_BYTES,
+    EventLog,
+    RecordingBudget,
+    read_events,
+    stop_reason,
+)
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
 from simmer.world.events import Event
 from simmer.world.outcome import Outcome
@@ -57,6 +66,13 @@ PLOTS = (
     ("localization.png", "The program's estimate against the truth"),
 )
 """The pictures ``simmer plot DIR`` draws, which report.md shows when they exist."""
+MAX_JSON_BYTES = 16_000_000
+"""Largest ``manifest.json`` or ``report.json`` read: a manifest holds the largest maze allowed
+in under 1 MB; a larger file is not one SimMeR wrote, and parsing it costs seconds and memory."""
+MAX_RUN_SECONDS = 3600.0
+"""Simulated seconds: a recorded run stops there unless ``--seconds`` says otherwise, and a
+replay re-simulates no further unless ``--max-seconds`` says so (an hour is some 200 MB of
+replay frames; the lab's longest task takes minutes)."""
 
 ENDINGS = {
     "quit": "stopped by hand (Esc, closing the window, Ctrl-C or a signal)",
@@ -153,16 +169,66 @@ def config_to_manifest(config: SimConfig) -> dict[str, Any]:
     }
 
 
-def config_from_manifest(data: dict[str, Any]) -> SimConfig:
+def recorded_plugins(data: dict[str, Any]) -> list[str]:
+    """The plug-ins a manifest's configuration names (its ``config`` part)."""
+    settings = data.get("settings")
+    plugins = settings.get("plugins") if isinstance(settings, dict) else None
+    if plugins is None:
+        return []
+    if not isinstance(plugins, list) or not all(isinstance(p, str) for p in plugins):
+        raise ValueError(f"config.settings.plugins is {plugins!r}, not a list of names")
+    return list(plugins)
+
+
+def config_from_manifest(
+    data: dict[str, Any], *, trust: bool = False, plugins: Sequence[str | Path] | None = None
+) -> SimConfig:
     """Validate a manifest's configuration again (ConfigError if it no longer validates,
-    e.g. a plug-in file is gone): the same settings and devices as the recorded run's."""
+    e.g. a plug-in file is gone): the same settings and devices as the recorded run's.
+
+    A run folder is data: the plug-ins it names are imported (their code run) only with
+    ``trust``; ``plugins`` (files or module names of the caller's choosing, relative to the
+    working directory) are imported in their place. Otherwise a configuration with plug-ins is
+    a :class:`~simmer.errors.UntrustedRun`, and nothing is imported."""
+    if not isinstance(data.get("settings"), dict) or not isinstance(data.get("devices"), list):
+        raise ValueError("its config has no settings table and devices list")
+    named = recorded_plugins(data)
     raw = dict(data["settings"])
+    if plugins is not None:
+        raw["plugins"] = [str(Path(p).resolve()) if _is_file(p) else str(p) for p in plugins]
+    elif named and not trust:
+        raise UntrustedRun(named)
     for device in data["devices"]:
-        raw.setdefault(device["group"], {})[device["id"]] = device["params"]
+        if not isinstance(device, dict) or not isinstance(
+            raw.setdefault(device["group"], {}), dict
+        ):
+            raise ValueError(f"config.devices: {device!r:.80} is not a recorded device")
+        raw[device["group"]][device["id"]] = device["params"]
     config = config_from_dict(
-        raw, data["source"], Path(data["base_dir"]), original=bool(data["original"])
+        raw, str(data["source"]), Path(data["base_dir"]), original=bool(data["original"])
     )
-    return replace(config, origin=data.get("origin", ""))
+    return replace(config, origin=str(data.get("origin", "")))
+
+
+def _is_file(entry: str | Path) -> bool:
+    """Whether a plug-in entry is a file (else an installed module's name), as
+    :func:`simmer.config.validate` tells them apart."""
+    text = str(entry)
+    return text.endswith(".py") or "/" in text or "\\" in text
+
+
+class UntrustedRun(ReplayError):
+    """A run folder's configuration names plug-ins, and re-simulating it would run their code."""
+
+    def __init__(self, plugins: Sequence[str], where: str = "") -> None:
+        self.plugins = list(plugins)
+        names = ", ".join(self.plugins)
+        super().__init__(
+            f"{where or 'the manifest'}: the run was recorded with plug-ins ({names}), and "
+            "re-simulating it runs their code: a run folder is data, so SimMeR does not, unless "
+            "asked. If you trust whoever made the folder, add --trust; or name your own copies "
+            "with --plugin FILE"
+        )
 
 
 def library_versions() -> dict[str, str]:
@@ -203,20 +269,68 @@ def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, A
     }
 
 
-def read_manifest(folder: str | Path) -> dict[str, Any]:
-    """A run folder's manifest (ValueError if it is from a newer SimMeR's layout)."""
-    path = Path(folder) / MANIFEST
-    data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
-    if data.get("format", 0) > FORMAT:
-        raise ValueError(f"{path} is from a newer SimMeR ({data.get('simmer_version')}); update")
+def read_json(path: Path) -> dict[str, Any]:
+    """A JSON object SimMeR wrote (manifest.json, report.json), read at most
+    :data:`MAX_JSON_BYTES`; ValueError naming the file if it is not one."""
+    with path.open("rb") as file:
+        text = file.read(MAX_JSON_BYTES + 1)
+    if len(text) > MAX_JSON_BYTES:
+        raise ValueError(
+            f"{path} is larger than {MAX_JSON_BYTES:,} bytes, more than SimMeR writes: "
+            "not a run's file"
+        )
+    try:
+        data = json.loads(text.decode("utf-8"))
+    except (UnicodeError, RecursionError, ValueError) as exc:
+        raise ValueError(f"{path} is not readable JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} holds {type(data).__name__}, not a JSON object")
     return data
 
 
-def load_run(folder: str | Path) -> LoadedRun:
-    """A recorded run's configuration (validated again from the manifest), seed and events."""
+def read_manifest(folder: str | Path) -> dict[str, Any]:
+    """A run folder's manifest (ValueError naming the file if it is not one, or is from a
+    newer SimMeR's layout)."""
+    path = Path(folder) / MANIFEST
+    data = read_json(path)
+    layout = data.get("format", 0)
+    if not isinstance(layout, int) or isinstance(layout, bool) or layout < 0:
+        raise ValueError(f"{path}: format {layout!r} is not a run folder's layout number")
+    if layout > FORMAT:
+        raise ValueError(
+            f"{path} is in layout {layout}, from a newer SimMeR "
+            f"({data.get('simmer_version')!s:.40}) than this one ({simmer.__version__}, layout "
+            f"{FORMAT}); update SimMeR to read it"
+        )
+    return data
+
+
+def load_run(
+    folder: str | Path,
+    *,
+    trust: bool = False,
+    plugins: Sequence[str | Path] | None = None,
+    max_seconds: float = MAX_RUN_SECONDS,
+) -> LoadedRun:
+    """A recorded run's configuration (validated again from the manifest), seed and events.
+
+    Plug-ins the run was recorded with are imported only with ``trust`` (or ``plugins`` in
+    their place: :func:`config_from_manifest`). ValueError naming the file if its events go
+    beyond ``max_seconds`` of simulated time (a replay would step that far)."""
     data = read_manifest(folder)
-    config = config_from_manifest(data["config"])
-    return LoadedRun(config, int(data["seed"]), read_events(Path(folder) / EVENTS))
+    where = Path(folder) / MANIFEST
+    try:
+        config = config_from_manifest(data["config"], trust=trust, plugins=plugins)
+    except UntrustedRun as exc:
+        raise UntrustedRun(exc.plugins, str(where)) from None
+    except (TypeError, ValueError, AttributeError) as exc:  # a ConfigError is a SimmerError
+        raise ValueError(f"{where}: not a run's manifest: {exc}") from None
+    seed = data["seed"]
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**128:
+        raise ValueError(f"{where}: seed {seed!r} is not a noise seed")
+    path = Path(folder) / EVENTS
+    max_steps = int(max_seconds * config.settings.frame_rate)
+    return LoadedRun(config, seed, read_events(path, max_steps=max_steps))
 
 
 def start_pose(config: SimConfig, seed: int) -> Pose:
@@ -307,7 +421,21 @@ def write_report_md(folder: str | Path) -> Path:
     again after drawing them)."""
     folder = Path(folder)
     info = read_manifest(folder)
-    report = json.loads((folder / REPORT_JSON).read_text(encoding="utf-8"))
+    report = read_json(folder / REPORT_JSON)
+    try:
+        lines = _report_lines(folder, info, report)
+    except (KeyError, TypeError, ValueError) as exc:
+        what = f"no {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise ValueError(
+            f"{folder / REPORT_JSON} (or {MANIFEST}) is not what SimMeR writes: {what}"
+        ) from None
+    path = folder / REPORT_MD
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path
+
+
+def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) -> list[str]:
+    """report.md's lines (KeyError, TypeError or ValueError if a file is malformed)."""
     outcome = report["outcome"]
     x, y, heading = outcome["final_pose"]
     reached = f"yes, at {_seconds(outcome['reached_at'])}" if outcome["reached"] else "no"
@@ -350,6 +478,8 @@ def write_report_md(folder: str | Path) -> Path:
     ]
     if "score" in outcome:
         lines += project_lines(outcome, info.get("scenario"))
+    if report.get("recording_stopped"):
+        lines += [f"**{report['recording_stopped']}**; the files hold the run until then.", ""]
     if report["resets"]:
         count = report["resets"]
         times = "once" if count == 1 else f"{count} times"
@@ -365,9 +495,7 @@ def write_report_md(folder: str | Path) -> Path:
         lines += ["## Plots", "", *(f"![{alt}]({name})\n" for name, alt in plots)]
     else:
         lines += [f"`simmer plot {folder}` adds the path and the sensors' readings here.", ""]
-    path = folder / REPORT_MD
-    path.write_text("\n".join(lines), encoding="utf-8")
-    return path
+    return lines
 
 
 # ----------------------------------------------------------------------------- recorder
@@ -382,9 +510,12 @@ class RunRecorder:
             sim.run_until_idle()
 
     ``outcome``: the run's :class:`~simmer.world.outcome.Outcome` if it has one already
-    (otherwise the recorder attaches its own, until :meth:`close`). Raises ValueError if
-    ``sim`` has already stepped (a recording starts at the first step, or it could not be
-    replayed), and FileExistsError or OSError as :func:`prepare_folder` does.
+    (otherwise the recorder attaches its own, until :meth:`close`). ``max_bytes``: what
+    events.jsonl and trace.csv may hold together. If they reach it, or the disk fills, the
+    recording stops (each file at its last whole line) and the run goes on: :attr:`stopped`
+    says why and ``on_stop`` is called with "the recording in DIR stopped: ...". Raises
+    ValueError if ``sim`` has already stepped (a recording starts at the first step, or it
+    could not be replayed), and FileExistsError or OSError as :func:`prepare_folder` does.
     """
 
     def __init__(
@@ -393,6 +524,9 @@ class RunRecorder:
         folder: str | Path,
         setup: RunSetup | None = None,
         outcome: Outcome | None = None,
+        *,
+        max_bytes: int = MAX_RECORDING_BYTES,
+        on_stop: Callable[[str], None] | None = None,
     ) -> None:
         if sim.frame != 0:
             raise ValueError(
@@ -406,14 +540,31 @@ class RunRecorder:
         self.outcome = Outcome.attach(sim) if outcome is None else outcome
         self._wall_start = time.monotonic()
         self.started = datetime.now().astimezone()
+        self.stopped: str | None = None
+        """Why the recording stopped before the run ended ("the recording in DIR stopped:
+        disk full"), or None."""
+        self._on_stop = on_stop
         _write_json(self.folder / MANIFEST, manifest(sim, self.setup, self.started))
-        self.events = EventLog(self.folder / EVENTS)
+        budget = RecordingBudget(max_bytes)
+        self.events = EventLog(self.folder / EVENTS, budget, self._stop)
         settings = sim.config.settings
-        self.trace = TraceWriter(self.folder / TRACE, sensor_ids(sim.config), settings.frame_rate)
+        self.trace = TraceWriter(
+            self.folder / TRACE, sensor_ids(sim.config), settings.frame_rate, budget, self._stop
+        )
         self.trace.begin(sim.time, sim.frame, sim.robot.pose)
         sim.add_observer(self.events)
         sim.add_observer(self.trace)
         self.closed = False
+
+    def _stop(self, reason: str) -> None:
+        """One file could not be written: stop both, so that they end together."""
+        if self.stopped is not None:
+            return
+        self.stopped = f"the recording in {self.folder} stopped: {reason}"
+        self.events.stop(reason)
+        self.trace.stop(reason)
+        if self._on_stop is not None:
+            self._on_stop(self.stopped)
 
     def close(self, ended_by: str = "closed", program_status: int | None = None) -> None:
         """Stop recording: close events.jsonl and trace.csv and write the report (again:
@@ -441,10 +592,17 @@ class RunRecorder:
             "resets": self.trace.resets,
             "events": self.events.written,
             "trace_rows": self.trace.rows,
+            "recording_stopped": self.stopped,
             "outcome": self.outcome.report().as_dict(),
         }
-        _write_json(self.folder / REPORT_JSON, report)
-        write_report_md(self.folder)
+        try:
+            _write_json(self.folder / REPORT_JSON, report)
+            write_report_md(self.folder)
+        except OSError as exc:  # a full disk: the events and trace say what there is
+            self._stop(stop_reason(exc))
+            for name in (REPORT_JSON, REPORT_MD):  # not half a report: none
+                with suppress(OSError):
+                    (self.folder / name).unlink(missing_ok=True)
 
     def __enter__(self) -> RunRecorder:
         return self

@@ -15,21 +15,26 @@ two rows at the lab's speeds. A row is written at the first step of every 1/30 s
 time (every second step at 60 steps a second; every step below 30), plus the start and the
 last step. The time restarts at 0 after a reset (the robot is back at its start).
 
-Rows are written and the file flushed once a wall-clock second, or every 1,024 rows (a write
-per row would cost more than making it), so after ``kill -9`` its last second may be missing;
-``events.jsonl`` has every event, and a replay (:func:`simmer.record.retrace`) writes the
-trace again.
+Rows are written once a wall-clock second, or every 1,024 rows (a write per row would cost
+more than making it), so after ``kill -9`` its last second may be missing; ``events.jsonl`` has
+every event, and a replay (:func:`simmer.record.retrace`) writes the trace again. The file takes
+its bytes from the recording's budget (:class:`~simmer.record.eventlog.RecordingBudget`); a
+write that does not fit, or fails (a full disk), stops the trace at its last whole row, and
+:attr:`TraceWriter.rows` counts only rows in the file.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from contextlib import suppress
 from pathlib import Path
 
 from simmer.geometry import Pose
 from simmer.protocol import command_ids
+from simmer.record.eventlog import RecordingBudget, stop_reason
 from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
 
 TRACE_RATE = 30.0
@@ -57,11 +62,27 @@ class TraceWriter:
     """An observer writing ``trace.csv`` (see the module doc) for these ``sensors`` (ids) at
     ``frame_rate`` steps a second."""
 
-    def __init__(self, path: str | Path, sensors: Sequence[str], frame_rate: float) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        sensors: Sequence[str],
+        frame_rate: float,
+        budget: RecordingBudget | None = None,
+        on_stop: Callable[[str], None] | None = None,
+    ) -> None:
         self.path = Path(path)
-        self._file = self.path.open("w", encoding="utf-8", newline="")
+        self._file = self.path.open("wb", buffering=0)
         self._closed = False
-        self._file.write(",".join(trace_columns(sensors)) + "\n")
+        self._budget = budget or RecordingBudget()
+        self._on_stop = on_stop
+        self._size = 0
+        """Bytes of whole rows (and the header) in the file."""
+        self.stopped: str | None = None
+        """Why the trace stopped before the run ended (None: it did not)."""
+        self._made = 0
+        """Rows made, written or waiting to be."""
+        self.rows = 0
+        """Rows in the file (without the header)."""
         self._column = {sensor: i for i, sensor in enumerate(sensors)}
         self._readings: list[float | None] = [None] * len(sensors)
         self._rows: list[str] = []
@@ -77,10 +98,9 @@ class TraceWriter:
         self._collisions = 0
         self._last: StepEvent | None = None
         self._flush_at = time.monotonic() + FLUSH_INTERVAL
-        self.rows = 0
-        """Rows written so far (without the header)."""
         self.resets = 0
         """Resets seen (each puts the time back to 0)."""
+        self._write(",".join(trace_columns(sensors)) + "\n", 0)
 
     def begin(self, time_s: float, step: int, pose: Pose) -> None:
         """Write the row of the state the run starts from (before its first step)."""
@@ -123,7 +143,7 @@ class TraceWriter:
                 self._changed = True
 
     def _row(self, time_s: float, step: int, pose: Pose) -> None:
-        if self._closed:  # a simulation thread that outlived the run
+        if self._closed or self.stopped:  # a simulation thread that outlived the run
             return
         if self._changed:
             self._changed = False
@@ -135,16 +155,46 @@ class TraceWriter:
         # the first step of the next 1/30 s: one whose step x rate reaches the next whole number
         tick = math.floor(step * self._rows_per_step + 1e-6)
         self._next_row = math.ceil((tick + 1 - 1e-6) / self._rows_per_step)
-        self.rows += 1
+        self._made += 1
         if len(self._rows) >= PENDING_ROWS * 2 or time.monotonic() >= self._flush_at:
             self._flush()
 
     def _flush(self) -> None:
-        """Write the rows made since the last flush, in one write, and flush the file."""
-        self._file.write("".join(self._rows))
-        self._file.flush()
-        self._rows.clear()
+        """Write the rows made since the last flush, in one write."""
+        if self._rows:
+            self._write("".join(self._rows), self._made - self.rows)
+            self._rows.clear()
         self._flush_at = time.monotonic() + FLUSH_INTERVAL
+
+    def _write(self, text: str, rows: int) -> None:
+        """Write ``rows`` whole rows (``text``) if they fit the budget and the disk; else stop."""
+        if self.stopped is not None:
+            return
+        data = text.encode("utf-8")
+        if not self._budget.take(len(data)):
+            self.stop(self._budget.why())
+            return
+        try:
+            done = self._file.write(data) or 0
+            while done < len(data):
+                done += self._file.write(data[done:]) or 0
+        except OSError as exc:
+            self.stop(stop_reason(exc))
+            return
+        self._size += len(data)
+        self.rows += rows
+
+    def stop(self, reason: str) -> None:
+        """Write nothing more, cutting the file back to its last whole row, and say why
+        (again: nothing)."""
+        if self.stopped is not None:
+            return
+        self.stopped = reason
+        self._rows.clear()
+        with suppress(OSError, ValueError):  # ValueError: closed already
+            os.ftruncate(self._file.fileno(), self._size)
+        if self._on_stop is not None:
+            self._on_stop(reason)
 
     def close(self) -> None:
         """Write the last step's row if it has none yet, and close the file (again: nothing)."""
@@ -154,4 +204,5 @@ class TraceWriter:
             self._row(self._last.time, self._last.step, self._last.pose)
         self._closed = True
         self._flush()
-        self._file.close()
+        with suppress(OSError):
+            self._file.close()

@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -61,11 +62,21 @@ class TraceRows:
 
 def read_trace_rows(path: str | Path) -> TraceRows:
     """The rows of a ``trace.csv`` (OSError if it cannot be read; ValueError if it has no
-    ``step`` column). A last line without its newline, or with too few cells, is left out."""
+    ``step`` column, or is larger than a recording holds). A last line without its newline,
+    or with too few cells, is left out."""
+    from simmer.record.eventlog import check_size
+
+    check_size(Path(path))
     text = Path(path).read_text(encoding="utf-8")
     if text and not text.endswith("\n"):
         text = text[: text.rfind("\n") + 1]
-    reader = csv.reader(io.StringIO(text))
+    try:
+        return _rows(csv.reader(io.StringIO(text)), path)
+    except csv.Error as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def _rows(reader: Iterator[list[str]], path: str | Path) -> TraceRows:
     header = next(reader, [])
     if STEP not in header:
         raise ValueError(f"{path} has no {STEP} column")

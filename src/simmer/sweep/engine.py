@@ -17,16 +17,20 @@ executor: a run is repeatable, and a filmed run that went otherwise is said so i
 
 from __future__ import annotations
 
+import _thread
 import importlib
 import multiprocessing
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
+from types import FrameType
 from typing import Any, ParamSpec, TypeVar
 
 from rich.console import Console
@@ -40,6 +44,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from simmer.proctree import adopt_orphans, descendants, stop_strays
 from simmer.sweep.results import (
     ResultsFile,
     header,
@@ -77,12 +82,87 @@ class SweepResult:
     """Failures filmed now."""
 
 
+PARENT_POLL = 0.5
+"""Wall seconds between a worker's checks that the sweep that started it is still there."""
+PARENT_GRACE = 10.0
+"""Wall seconds a worker whose sweep is gone gives its run's program to stop (as Ctrl-C stops
+it) before it stops what is left and exits."""
+STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+"""Signals that stop a sweep cleanly (Ctrl-C, ``kill``, closing the terminal), where they exist."""
+
+
+class SweepStopped(KeyboardInterrupt):
+    """A signal stopped the sweep (as Ctrl-C does); ``signum`` and ``name`` say which."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        self.name = signal.Signals(signum).name
+        super().__init__(self.name)
+
+
 def local_pool(workers: int | None = None) -> Engine:
     """A pool of ``workers`` processes (default: one per core) started with ``spawn``, so
-    no thread or open port of this process is copied into them."""
+    no thread or open port of this process is copied into them. Each worker exits by itself
+    if this process goes away (:func:`_watch_parent`)."""
     count = workers or os.cpu_count() or 1
     context = multiprocessing.get_context("spawn")
-    return lambda: ProcessPoolExecutor(max_workers=count, mp_context=context)
+    return lambda: ProcessPoolExecutor(
+        max_workers=count,
+        mp_context=context,
+        initializer=_watch_parent,
+        initargs=(os.getpid(),),
+    )
+
+
+def _watch_parent(parent: int) -> None:
+    """In a worker: when the sweep that started it is gone (``kill -9``, a crash), stop the
+    run in progress as Ctrl-C would (its program's whole tree with it) and exit; a worker is
+    otherwise left waiting for work forever. The worker also becomes the subreaper of the
+    programs it starts (:mod:`simmer.proctree`)."""
+    adopt_orphans()
+    gone = threading.Event()
+
+    def watch() -> None:
+        while not gone.wait(PARENT_POLL):
+            if os.getppid() != parent:
+                gone.set()
+        _thread.interrupt_main()  # a run in progress stops, as with Ctrl-C
+        deadline = time.monotonic() + PARENT_GRACE
+        while descendants() and time.monotonic() < deadline:  # its program is being stopped
+            threading.Event().wait(PARENT_POLL / 5)
+        stop_strays(set())
+        os._exit(1)
+
+    threading.Thread(target=watch, name="simmer-parent-watch", daemon=True).start()
+
+
+@contextmanager
+def _stopped_by_signals(pool: _Pool) -> Iterator[None]:
+    """Within ``with``: :data:`STOP_SIGNALS` stop the sweep as Ctrl-C does: each worker is
+    sent SIGINT (it stops its run, and its program's tree), and :class:`SweepStopped` is
+    raised here, where the pool is then shut down. Only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    stopping: list[int] = []
+
+    def handle(signum: int, _frame: FrameType | None) -> None:
+        for pid in pool.worker_pids():
+            with suppress(OSError):
+                os.kill(pid, signal.SIGINT)
+        if not stopping:  # once: a second signal must not interrupt the shutdown
+            stopping.append(signum)
+            raise SweepStopped(signum)
+
+    previous = {}
+    for name in STOP_SIGNALS:
+        if (number := getattr(signal, name, None)) is not None:
+            previous[number] = signal.signal(number, handle)
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 class DaskExecutor(Executor):
@@ -157,6 +237,11 @@ class _Pool:
         width = getattr(self._current, "width", None)
         return width if isinstance(width, int) else self.default_width
 
+    def worker_pids(self) -> list[int]:
+        """The executor's worker processes, if it is a local pool."""
+        processes = getattr(self._current, "_processes", None) or {}
+        return [int(pid) for pid in processes]
+
     def close(self, *, cancel: bool = False) -> None:
         """Shut the executor down (waiting for its runs unless ``cancel``)."""
         if self._current is not None:
@@ -187,26 +272,29 @@ def run_sweep(
     success_column = results.columns.index("success")
     successes = sum(cells[success_column] == "True" for cells in results.done.values())
     pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
-    try:
-        with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
+    with _stopped_by_signals(pool):
+        try:
+            with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
 
-            def record(run: RunSpec, result: RunResult) -> None:
-                nonlocal successes
-                successes += result.success
-                kept = keep_files(folder, names[run.key()], result.files) if result.files else ""
-                results.add(row(run, result, kept, spec.project))
-                advance(successes)
+                def record(run: RunSpec, result: RunResult) -> None:
+                    nonlocal successes
+                    successes += result.success
+                    kept = (
+                        keep_files(folder, names[run.key()], result.files) if result.files else ""
+                    )
+                    results.add(row(run, result, kept, spec.project))
+                    advance(successes)
 
-            try:
-                _execute_all(todo, pool, execute, record)
-            finally:
-                complete = all(run.key() in results.done for run in runs)
-                results.close([run.key() for run in runs] if complete else None)
-        filmed, remarks = _film_failures(spec, runs, folder, pool, console)
-    except BaseException:
-        pool.close(cancel=True)
-        raise
-    pool.close()
+                try:
+                    _execute_all(todo, pool, execute, record)
+                finally:
+                    complete = all(run.key() in results.done for run in runs)
+                    results.close([run.key() for run in runs] if complete else None)
+            filmed, remarks = _film_failures(spec, runs, folder, pool, console)
+        except BaseException:
+            pool.close(cancel=True)
+            raise
+        pool.close()
     from simmer.sweep.pictures import draw_pictures
 
     write_summary(folder, spec, source, draw_pictures, remarks)

@@ -46,6 +46,9 @@ Z95 = 1.959963984540054
 TAIL_COLUMNS = ("status", "exit_status", "wall_time", "run", "folder", "detail")
 RUNS = "runs"
 """The folder (in the sweep's) of the kept runs' folders."""
+MAX_RESULTS_BYTES = 256 * 1024 * 1024
+"""Largest results.csv read back by ``--resume``: the most runs a sweep has, with long
+output tails, take some 100 MB."""
 GALLERY = 8
 """Failing runs shown per kind of failure in summary.md (results.csv lists them all)."""
 FRAME_WIDTH = 300
@@ -113,6 +116,17 @@ def row(run: RunSpec, result: RunResult, folder: str = "", project: bool = False
     ]
 
 
+def _is_kept_folder(cell: str) -> bool:
+    """Whether a results row's ``folder`` cell is empty or a folder under ``runs/``."""
+    parts = cell.split("/")
+    return not cell or (
+        len(parts) == 2
+        and parts[0] == RUNS
+        and parts[1] not in ("", ".", "..")
+        and "\\" not in cell
+    )
+
+
 def keep_files(folder: Path, name: str, files: Mapping[str, bytes]) -> str:
     """Write a run's files into ``folder``/runs/``name`` (replacing what a stopped sweep left
     there), its report.md written again for its place; its path relative to ``folder``."""
@@ -151,14 +165,28 @@ class ResultsFile:
             self._file.flush()
 
     def _read(self) -> dict[str, list[str]]:
-        with self.path.open(encoding="utf-8", newline="") as file:
-            rows = list(csv.reader(file))
+        """The finished runs' rows by key (ValueError naming the file if it is not a results
+        table). A row whose folder is not one of ``runs/`` is not taken as done: it would
+        point the filming of failures elsewhere."""
+        size = self.path.stat().st_size
+        if size > MAX_RESULTS_BYTES:
+            raise ValueError(
+                f"{self.path} is {size:,} bytes, more than the results of a sweep's runs "
+                f"({MAX_RESULTS_BYTES:,}): not a results table"
+            )
+        try:
+            with self.path.open(encoding="utf-8", newline="") as file:
+                rows = list(csv.reader(file))
+        except (csv.Error, UnicodeError) as exc:
+            raise ValueError(f"{self.path} is not a results table: {exc}") from None
         if not rows:
             return {}
         if rows[0] != self.columns:
             raise ValueError(f"{self.path} holds another sweep's results (other columns)")
-        at = self.columns.index("run")
-        return {r[at]: r for r in rows[1:] if len(r) == len(self.columns)}
+        at, kept = self.columns.index("run"), self.columns.index("folder")
+        return {
+            r[at]: r for r in rows[1:] if len(r) == len(self.columns) and _is_kept_folder(r[kept])
+        }
 
     def add(self, cells: list[str]) -> None:
         """Append one run's row and flush it to disk."""

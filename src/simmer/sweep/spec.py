@@ -40,7 +40,7 @@ import itertools
 import math
 import re
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -93,6 +93,19 @@ DISTRIBUTIONS: dict[str, str] = {
 }
 FOLDER_NAME = 120
 """Characters a run folder's name may have before it is named by the run's key instead."""
+MAX_RUNS = 100_000
+"""Runs in a sweep (configurations x grid combinations x draws x seeds): at a second a run
+on 2 cores, some 14 hours, and results.csv of some 30 MB; each run is described in memory
+(about 1 KB) before the first starts. Counted before anything is built, so a sweep of 10**12
+runs is refused at once."""
+MAX_KEY_PARTS = 16
+"""Names in a dotted key (``drives.w0.error.y`` has 4): tables nest no deeper in a
+configuration, and deeper nesting ran out of recursion."""
+MAX_SWEEP_FILE_BYTES = 1_000_000
+"""Largest sweep file read (the examples have under 1 kB)."""
+SETTINGS_CHECKED = 64
+"""Grid combinations :meth:`SweepSpec.check_settings` builds at most beyond one per value."""
+LIMITS = "SimMeR's limits are in docs/limits.md"
 
 
 @dataclass(frozen=True)
@@ -130,7 +143,7 @@ class SweepSpec:
     configs: tuple[Path, ...]
     kind: ControllerKind
     controller: str
-    seeds: tuple[int, ...]
+    seeds: Sequence[int]
     grid: tuple[tuple[str, tuple[Any, ...]], ...]
     seconds: float | None = None
     wall_seconds: float = DEFAULT_WALL_SECONDS
@@ -170,21 +183,31 @@ class SweepSpec:
             columns.append([distribution.draw(rng) for _ in range(self.sample_count)])
         return list(zip(*columns, strict=True))
 
+    @property
+    def run_count(self) -> int:
+        """How many runs :meth:`runs` gives, counted without making them."""
+        return run_count(
+            len(self.configs), [len(v) for _, v in self.grid], self.sample_count, len(self.seeds)
+        )
+
     def runs(self) -> list[RunSpec]:
-        """Every run: each configuration, each combination of the grid's values (the first key
-        slowest), each draw of the sample, each seed."""
+        """Every run, in order (:meth:`iter_runs`)."""
+        return list(self.iter_runs())
+
+    def iter_runs(self) -> Iterator[RunSpec]:
+        """Every run, made as it is asked for: each configuration, each combination of the
+        grid's values (the first key slowest), each draw of the sample, each seed."""
         keys = [key for key, _ in self.grid] + [key for key, _ in self.sample]
         draws: list[tuple[int | None, tuple[Any, ...]]] = (
             list(enumerate(self.draws())) if self.sample else [(None, ())]
         )
-        runs = []
         for config in self.configs:
             for values in itertools.product(*(values for _, values in self.grid)):
                 named = (config.name,) if len(self.configs) > 1 else ()
                 for number, drawn in draws:
                     setting = (*named, *values, *((number, *drawn) if self.sample else ()))
                     for seed in self.seeds:
-                        runs.append(
+                        yield (
                             RunSpec(
                                 config=str(config),
                                 overrides=tuple(zip(keys, (*values, *drawn), strict=True)),
@@ -201,19 +224,38 @@ class SweepSpec:
                                 answer=self.answer,
                             )
                         )
-        return runs
+
+    def settings_to_check(self) -> Iterator[tuple[Any, ...]]:
+        """Grid combinations that together use every value of every key: each value with the
+        other keys at their first, then up to :data:`SETTINGS_CHECKED` combinations drawn at
+        random (all of them, for a small grid). A 1,000^4 grid is checked in some 4,000
+        configurations, not 10**12."""
+        lists = [values for _, values in self.grid]
+        combinations = math.prod(len(values) for values in lists)
+        if combinations <= len(lists) + sum(map(len, lists)) + SETTINGS_CHECKED:
+            yield from itertools.product(*lists)
+            return
+        first = tuple(values[0] for values in lists)
+        yield first
+        for i, values in enumerate(lists):
+            for value in values[1:]:
+                yield (*first[:i], value, *first[i + 1 :])
+        rng = np.random.default_rng(0)
+        for _ in range(SETTINGS_CHECKED):
+            yield tuple(values[int(rng.integers(len(values)))] for values in lists)
 
     def check_settings(self) -> None:
-        """Build each configuration with each combination of the grid's values (and each
-        sampled key at a typical value), so a misspelt key or a value no run could use stops
-        the sweep before it starts, naming the setting and the fix; :class:`SweepError`. A
-        random draw outside a key's range later is a run's own ``invalid`` row."""
+        """Build each configuration with the grid's values (every value of every key at
+        least once: :meth:`settings_to_check`), and each sampled key at a typical value, so a
+        misspelt key or a value no run could use stops the sweep before it starts, naming the
+        setting and the fix; :class:`SweepError`. A random draw outside a key's range later,
+        or a combination not checked that no run can use, is a run's own ``invalid`` row."""
         from simmer.errors import ConfigError
         from simmer.sweep.runs import build_config
 
         typical = tuple((key, spread.typical()) for key, spread in self.sample)
         for config in self.configs:
-            for values in itertools.product(*(values for _, values in self.grid)):
+            for values in self.settings_to_check():
                 grid = tuple(zip((key for key, _ in self.grid), values, strict=True))
                 try:
                     build_config(str(config), grid + typical)
@@ -256,19 +298,63 @@ def _stream(seed: int, key: str) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=spawn))
 
 
+def run_count(configs: int, grid: list[int], draws: int, seeds: int) -> int:
+    """Runs of a sweep with these many configurations, values of each grid key, draws (0: no
+    sample) and seeds."""
+    return configs * math.prod(grid) * max(draws, 1) * seeds
+
+
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file (:class:`SweepError` saying what is wrong)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = _read_text(path)
+        data = tomllib.loads(_short_keys(text, path))
     except (OSError, UnicodeDecodeError) as exc:
         raise SweepError(f"cannot read {path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SweepError(f"{path} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SweepError(f"{path}: tables or lists nested too deep to read") from None
     try:
         return sweep_from_dict(data, path.resolve().parent)
     except SweepError as exc:
         raise SweepError(f"{path}: {exc}") from None
+
+
+def _short_keys(text: str, path: Path) -> str:
+    """``text``, unless a line's key has far more names than :data:`MAX_KEY_PARTS`: refused
+    before it is parsed, since Python's TOML reader takes time growing with the square of a
+    dotted key's length (6 s for 20,000 names). The exact count is checked on the parsed
+    keys."""
+    for line in text.splitlines():
+        key = line.split("=", 1)[0] if "=" in line else line
+        if key.count(".") > 4 * MAX_KEY_PARTS:
+            names = key.strip().strip("[\"'").split(".")
+            raise SweepError(f"{path}: {_long_key(names)}")
+    return text
+
+
+def _long_key(names: list[str]) -> str:
+    """What is wrong with a key of these many names."""
+    return (
+        f"{'.'.join(names[:4])}...: a key of more than {MAX_KEY_PARTS} names (MAX_KEY_PARTS; "
+        f"{LIMITS}); configuration keys have at most 5"
+    )
+
+
+def _read_text(path: Path) -> str:
+    """A sweep file's text, at most :data:`MAX_SWEEP_FILE_BYTES` (SweepError otherwise)."""
+    if path.exists() and not path.is_file():
+        raise SweepError(f"{path} is not a regular file (a folder, a device or a pipe)")
+    with path.open("rb") as file:
+        data = file.read(MAX_SWEEP_FILE_BYTES + 1)
+    if len(data) > MAX_SWEEP_FILE_BYTES:
+        raise SweepError(
+            f"{path} is larger than {MAX_SWEEP_FILE_BYTES:,} bytes, the limit of a sweep file "
+            f"(MAX_SWEEP_FILE_BYTES; {LIMITS}): is it the right file?"
+        )
+    return data.decode("utf-8")
 
 
 def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
@@ -283,10 +369,15 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     configs = data.get("config")
     if isinstance(configs, str):
         configs = [configs]
-    if not configs or not all(isinstance(c, str) for c in configs):
+    if not isinstance(configs, list) or not configs or not all(isinstance(c, str) for c in configs):
         raise SweepError("config: a configuration file (.toml or config.py), or a list of them")
     paths = tuple((folder / c).resolve() for c in configs)
     for config in paths:
+        if config.exists() and not config.is_file():
+            raise SweepError(
+                f"config: {config} is not a regular file (a folder, a device or a pipe); "
+                "name a configuration file (.toml or config.py)"
+            )
         if not config.is_file():
             raise SweepError(f"config: no such file {config}")
     if len({config.name for config in paths}) < len(paths):
@@ -304,6 +395,16 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
     project = _is_project(paths[0])
     grid = _grid(_every_scenario(data.get("grid", {}), paths[0]))
     count, sample = _sample(data.get("sample", {}), {key for key, _ in grid})
+    seeds = _seeds(data.get("seeds", 1))
+    seed_count = seeds.stop if isinstance(seeds, range) else len(seeds)  # len() stops at 2**63
+    runs = run_count(len(paths), [len(values) for _, values in grid], count, seed_count)
+    if runs > MAX_RUNS:
+        combinations = math.prod(len(values) for _, values in grid)
+        raise SweepError(
+            f"{runs:,} runs ({len(paths)} configuration(s) x {combinations:,} "
+            f"grid combination(s) x {max(count, 1):,} draw(s) x {seed_count:,} seed(s)); at most "
+            f"{MAX_RUNS:,} (MAX_RUNS: {LIMITS}): split the sweep into several files"
+        )
     if "sample_seed" in data and not sample:
         raise SweepError("sample_seed: seeds the [sample] table's draws, and there is none")
     keep = data.get("keep", "failures")
@@ -322,7 +423,7 @@ def sweep_from_dict(data: Mapping[str, Any], folder: Path) -> SweepSpec:
         configs=paths,
         kind=kind,
         controller=controller,
-        seeds=_seeds(data.get("seeds", 1)),
+        seeds=seeds,
         grid=grid,
         seconds=_limit(data, "seconds", None),
         wall_seconds=_limit(data, "wall_seconds", DEFAULT_WALL_SECONDS) or DEFAULT_WALL_SECONDS,
@@ -420,9 +521,9 @@ def _count(data: Mapping[str, Any], name: str, default: int) -> int:
     return int(value)
 
 
-def _seeds(value: Any) -> tuple[int, ...]:
+def _seeds(value: Any) -> Sequence[int]:
     if _is_count(value) and value > 0:
-        return tuple(range(value))
+        return range(value)  # 10**12 seeds are counted, never listed
     if (
         isinstance(value, list)
         and value
@@ -435,14 +536,20 @@ def _seeds(value: Any) -> tuple[int, ...]:
     )
 
 
-def _dotted(table: Mapping[str, Any], leaf: Callable[[Any], bool]) -> list[tuple[str, Any]]:
+def _dotted(
+    table: Mapping[str, Any], leaf: Callable[[Any], bool], way: tuple[str, ...] = ()
+) -> list[tuple[str, Any]]:
     """A table's entries by dotted key, whether the file quoted the keys
     (``"drives.w0.error.y" = ...``) or not (``drives.w0.error.y = ...`` makes nested tables):
-    nested tables are followed down to the first value that is a ``leaf``."""
+    nested tables are followed down to the first value that is a ``leaf``. A key of more than
+    :data:`MAX_KEY_PARTS` names is a SweepError."""
     entries = []
     for key, value in table.items():
+        names = (*way, *key.split("."))
+        if len(names) > MAX_KEY_PARTS:
+            raise SweepError(_long_key(list(names)))
         if isinstance(value, dict) and value and not leaf(value):
-            entries += [(f"{key}.{inner}", v) for inner, v in _dotted(value, leaf)]
+            entries += [(f"{key}.{inner}", v) for inner, v in _dotted(value, leaf, names)]
         else:
             entries.append((key, value))
     return entries
@@ -464,13 +571,23 @@ def _grid(value: Any) -> tuple[tuple[str, tuple[Any, ...]], ...]:
     for key, values in _dotted(value, lambda _table: False):
         if not isinstance(values, list) or not values:
             raise SweepError(f"[grid] {key}: a non-empty list of values, not {values!r}")
-        seen: list[Any] = []
+        seen: set[Any] = set()
         for item in values:
-            if item in seen:
-                raise SweepError(f"[grid] {key}: {item!r} is listed twice")
-            seen.append(item)
+            frozen = _frozen(item)
+            if frozen in seen:
+                raise SweepError(f"[grid] {key}: {item!r:.80} is listed twice")
+            seen.add(frozen)
         grid.append((key, tuple(values)))
     return tuple(grid)
+
+
+def _frozen(value: Any) -> Any:
+    """A TOML value as something hashable that is equal where the value is (lists, tables)."""
+    if isinstance(value, list):
+        return ("list", tuple(_frozen(v) for v in value))
+    if isinstance(value, dict):
+        return ("table", frozenset((k, _frozen(v)) for k, v in value.items()))
+    return value
 
 
 def _sample(value: Any, grid: set[str]) -> tuple[int, tuple[tuple[str, Distribution], ...]]:

@@ -75,6 +75,11 @@ FAILURES = {
 }
 """How a run can fail (the ``failure`` column), in the order the summary shows them."""
 CRASHED_STATUSES = frozenset({"error", "crashed", "invalid"})
+MAX_EXPRESSION_CHARS = 1000
+"""Characters of a success condition: the default has 27; a longer one is not a condition
+anyone reads (and 200,000 ``not``s took gigabytes to parse)."""
+MAX_EXPRESSION_DEPTH = 32
+"""Operators nested in a success condition (``not not x`` is 2 deep): evaluation recurses."""
 
 
 class SweepError(ValueError):
@@ -130,11 +135,16 @@ def success_condition(text: str) -> Callable[[Mapping[str, Any]], bool]:
     parentheses; nothing else is allowed (it is parsed, never run by Python). A comparison
     with a field that has no value (``task2_time`` when the block was not reached) is false.
     Raises :class:`SweepError` naming what is not allowed; cached (a worker checks each run)."""
+    if len(text) > MAX_EXPRESSION_CHARS:
+        raise SweepError(
+            f"success: {len(text):,} characters; at most {MAX_EXPRESSION_CHARS:,} (the limit "
+            "of a success condition: SimMeR's MAX_EXPRESSION_CHARS in simmer/sweep/success.py)"
+        )
     try:
         tree = ast.parse(text.strip(), mode="eval")
-    except SyntaxError:
-        raise SweepError(f"success: cannot read {text!r}") from None
-    _check(tree.body, text)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        raise SweepError(f"success: cannot read {text[:80]!r}") from None
+    _check(tree.body, text, 0)
     return lambda fields: bool(_evaluate(tree.body, fields))
 
 
@@ -143,7 +153,14 @@ def succeeded(condition: str, outcome: Mapping[str, Any] | None) -> bool:
     return outcome is not None and success_condition(condition)(flat_outcome(outcome))
 
 
-def _check(node: ast.expr, text: str) -> None:
+def _check(node: ast.expr, text: str, depth: int) -> None:
+    if depth > MAX_EXPRESSION_DEPTH:
+        raise SweepError(
+            f"success: operators nested more than {MAX_EXPRESSION_DEPTH} deep (the limit of a "
+            "success condition: MAX_EXPRESSION_DEPTH in simmer/sweep/success.py); write it "
+            "more simply"
+        )
+    depth += 1
     if isinstance(node, ast.Name):
         known = (*OUTCOME_FIELDS, *PROJECT_FIELDS)
         if node.id not in known and node.id not in ("true", "false"):
@@ -154,18 +171,18 @@ def _check(node: ast.expr, text: str) -> None:
             return
     elif isinstance(node, ast.BoolOp):
         for value in node.values:
-            _check(value, text)
+            _check(value, text, depth)
         return
     elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not | ast.USub):
-        _check(node.operand, text)
+        _check(node.operand, text, depth)
         return
     elif isinstance(node, ast.Compare) and all(type(op) in _COMPARE for op in node.ops):
         for value in (node.left, *node.comparators):
-            _check(value, text)
+            _check(value, text, depth)
         return
     elif isinstance(node, ast.BinOp) and type(node.op) in _ARITHMETIC:
-        _check(node.left, text)
-        _check(node.right, text)
+        _check(node.left, text, depth)
+        _check(node.right, text, depth)
         return
     shown = ast.get_source_segment(text.strip(), node) or type(node).__name__
     raise SweepError(

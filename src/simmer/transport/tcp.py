@@ -34,7 +34,6 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from concurrent.futures import Future
 from dataclasses import replace
 
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
@@ -55,7 +54,7 @@ from simmer.protocol import (
     frame_text,
     printable,
 )
-from simmer.transport.bus import BusClosed, CommandBus, Request
+from simmer.transport.bus import BusClosed, CommandBus, Reply, Request
 
 log = logging.getLogger("simmer.transport")
 
@@ -386,7 +385,7 @@ class _Pending:
 
     __slots__ = ("arrived", "decoded", "future", "order")
 
-    def __init__(self, decoded: Decoded, future: Future[list[float]], order: int) -> None:
+    def __init__(self, decoded: Decoded, future: Reply[list[float]], order: int) -> None:
         self.decoded = decoded
         self.future = future
         self.order = order
@@ -650,8 +649,8 @@ class _StreamConnection(_Connection):
         self.inbox = bytearray()
         self.searched = 0
         self.ended = False  # a message over a limit: no more input; close after its reply
-        self.last: Future[list[float]] | None = None
-        self.latest: Future[list[float]] | None = None  # the last message submitted
+        self.last: Reply[list[float]] | None = None
+        self.latest: Reply[list[float]] | None = None  # the last message submitted
         self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
         self.messages = 0
         self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
@@ -672,8 +671,11 @@ class _StreamConnection(_Connection):
         self.pump()
 
     def drained(self) -> None:
-        """Every reply is sent: take the next lines."""
-        self.pump()
+        """Every reply is sent: take the next lines (if any came meanwhile)."""
+        if self.inbox:
+            self.pump()
+        else:
+            self.rearm()
 
     def pump(self) -> None:
         """Submit complete lines while allowed (see the class doc); a line over the size
@@ -698,9 +700,8 @@ class _StreamConnection(_Connection):
             elif line.startswith(META_PREFIX):
                 self.submit(decode_meta(line, end + 1))
             else:
-                decoded = decode_message(line, self.stream.encoding)
                 clock = line.startswith(CLOCK_PREFIX)
-                self.submit(replace(decoded, clock=clock, size=end + 1))
+                self.submit(decode_message(line, self.stream.encoding, size=end + 1, clock=clock))
         self.rearm()
         self.update_events()
 

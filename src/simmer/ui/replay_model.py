@@ -18,13 +18,12 @@ changes with its keys (play, pause, speed, seek, next and previous command); it 
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import platform
 import tempfile
 from bisect import bisect_right
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,10 +38,13 @@ from simmer.localize.belief import Belief
 from simmer.record.runfolder import (
     EVENTS,
     MANIFEST,
+    MAX_RUN_SECONDS,
     REPORT_JSON,
     TRACE,
     library_versions,
     load_run,
+    read_json,
+    read_manifest,
     sensor_ids,
 )
 from simmer.record.trace import TraceWriter
@@ -337,9 +339,18 @@ class Recording:
         return self.frames[frame].snapshot(paused=paused, speed=speed)
 
     @classmethod
-    def load(cls, folder: str | Path, fps: int = FPS) -> Recording:
+    def load(
+        cls,
+        folder: str | Path,
+        fps: int = FPS,
+        *,
+        trust: bool = False,
+        plugins: Sequence[str | Path] | None = None,
+        max_seconds: float = MAX_RUN_SECONDS,
+    ) -> Recording:
         """Re-simulate the run in ``folder``; :class:`ReplayError` (one line) if it cannot be
-        (not a run folder, unreadable files, a configuration that no longer loads).
+        (not a run folder, unreadable files, a configuration that no longer loads, plug-ins
+        not trusted: :func:`simmer.record.load_run`, events beyond ``max_seconds``).
 
         A recording cut short (no ``report.json``: the run was killed or crashed) is replayed
         as far as its events and trace go, and :attr:`Check.incomplete` says so.
@@ -347,17 +358,31 @@ class Recording:
         folder = Path(folder)
         manifest = _read_manifest(folder)
         try:
-            config, seed, events = load_run(folder)
+            config, seed, events = load_run(
+                folder, trust=trust, plugins=plugins, max_seconds=max_seconds
+            )
+        except ReplayError:
+            raise
         except ConfigError as exc:
             problem = exc.issues[0].render(exc.source) if exc.issues else str(exc)
-            raise ReplayError(f"the recorded configuration no longer loads: {problem}") from None
+            raise ReplayError(
+                f"{folder / MANIFEST}: the recorded configuration no longer loads: {problem}"
+            ) from None
         except KeyError as exc:
             raise ReplayError(f"{folder / MANIFEST} has no {exc}: not a run's manifest") from None
-        except (OSError, ValueError) as exc:
+        except OSError as exc:
             raise ReplayError(f"cannot read the run in {folder}: {exc}") from None
+        except ValueError as exc:  # each names its file
+            raise ReplayError(str(exc)) from None
         recorded = _read_recorded_trace(folder)
         incomplete = _incomplete(folder, events)
         until = _replay_until(events, recorded) if incomplete else None
+        max_steps = int(max_seconds * config.settings.frame_rate)
+        if until is not None and until > max_steps:
+            raise ReplayError(
+                f"{folder / TRACE}: a row at step {until:,} is beyond the replay limit of "
+                f"{max_steps:,} steps ({max_seconds:g} s; --max-seconds raises it)"
+            )
         sim = Simulation(config, seed=seed)
         quiet = _errors_only(logging.getLogger("simmer"))  # its warnings were seen when it ran
         with quiet, tempfile.TemporaryDirectory(prefix="simmer-replay-") as tmp:
@@ -388,7 +413,7 @@ class Recording:
             )
         commands = _commands(collector, events)
         check = Check(
-            rows=len(replayed.rows),
+            rows=_compared_rows(recorded, replayed),
             difference=difference,
             difference_time=None if difference is None else _run_time(difference, collector),
             reply_differences=tuple(result.differences),
@@ -426,12 +451,20 @@ def _read_manifest(folder: Path) -> dict[str, object]:
             "(record one with simmer run --record DIR)"
         )
     try:
-        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, UnicodeError, ValueError) as exc:
+        return read_manifest(folder)
+    except OSError as exc:
         raise ReplayError(f"cannot read {folder / MANIFEST}: {exc}") from None
-    if not isinstance(data, dict):
-        raise ReplayError(f"{folder / MANIFEST} is not a run's manifest")
-    return data
+    except ValueError as exc:
+        raise ReplayError(str(exc)) from None
+
+
+def _compared_rows(recorded: TraceRows | None, replayed: TraceRows) -> int:
+    """Rows of the recorded trace that the re-simulation was compared with: never more than
+    the file holds (after ``kill -9`` it lacks its last second)."""
+    if recorded is None:
+        return 0
+    keys = {key for key, _ in replayed.rows}
+    return sum(key in keys for key, _ in recorded.rows)
 
 
 def _recorded_libraries(manifest: dict[str, object]) -> dict[str, str]:
@@ -456,13 +489,18 @@ def _read_recorded_trace(folder: Path) -> TraceRows | None:
 
 def _incomplete(folder: Path, events: list[Event]) -> str | None:
     """Why the recording is incomplete (None: it is complete): the recorder writes
-    report.json when the run ends, however it ends, unless it is killed."""
+    report.json when the run ends, however it ends, unless it is killed; it says there
+    whether the recording stopped before the run did (a full disk)."""
     if (folder / REPORT_JSON).is_file():
-        return None
+        try:
+            stopped = read_json(folder / REPORT_JSON).get("recording_stopped")
+        except (OSError, ValueError) as exc:
+            raise ReplayError(str(exc)) from None
+        return None if stopped is None else f"incomplete recording: {stopped}"
     end = f"{events[-1].time:.2f} s" if events else "its start"
     return (
         f"incomplete recording: no {REPORT_JSON}, {EVENTS} ends at {end} "
-        "(the run was killed or crashed)"
+        "(the run was killed or crashed, or the disk filled)"
     )
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import math
+import threading
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from types import MappingProxyType
@@ -21,7 +22,7 @@ import numpy as np
 from simmer.config.loader import load_config
 from simmer.config.models import SimConfig
 from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
-from simmer.errors import CommandError, DeviceKindError, describe_exception
+from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_exception
 from simmer.geometry import (
     FloatArray,
     Pose,
@@ -79,6 +80,7 @@ class Simulation:
         self.maze = Maze.from_settings(settings)
         self.zones = Zones.from_settings(settings)
         self._dt = 1.0 / settings.frame_rate
+        self._owner: int | None = None
         self.observers: list[Observer] = []
         self._simulate_list = settings.simulate_list
         self._lenient = settings.lenient_commands
@@ -179,6 +181,8 @@ class Simulation:
         an unknown device answers NaN and logs why (or adds it to ``reasons``, see
         :meth:`execute`). ``client`` names the sender in the event stream.
         """
+        if self._owner is not None:
+            self._check_thread("command")
         commands = parse_message(message, lenient=self._lenient)
         for command in commands:
             if command.lenient:
@@ -276,11 +280,31 @@ class Simulation:
 
     def step(self, n: int = 1) -> None:
         """Advance the simulation by ``n`` steps of ``1 / frame_rate`` seconds."""
+        if self._owner is not None:
+            self._check_thread("step")
         for _ in range(n):
             self._step_once()
 
+    def own(self, thread: int | None) -> None:
+        """Let only ``thread`` (an ident, the loop's: :meth:`simmer.runner.Runner.run`) drive
+        the simulation; None: any thread may again. While owned, :meth:`command`, :meth:`step`
+        and :meth:`reset` from another thread raise :class:`~simmer.errors.WrongThread`
+        instead of racing the loop."""
+        self._owner = thread
+
+    def _check_thread(self, what: str) -> None:
+        here = threading.get_ident()
+        if here != self._owner:
+            raise WrongThread(
+                f"Simulation.{what}() was called from thread {threading.current_thread().name!r}"
+                ", but the simulation belongs to the thread running its loop: hand it the "
+                "message through the runner's bus (CommandBus.submit) instead"
+            )
+
     def run_until_idle(self, max_seconds: float = 600.0) -> bool:
         """Step until no drive moves; False if one still moves after ``max_seconds`` simulated."""
+        if self._owner is not None:
+            self._check_thread("run_until_idle")
         limit = self._time + max_seconds
         robot = self._robot
         while robot.any_drive_moving:
@@ -466,6 +490,8 @@ class Simulation:
         noise comes from that seed from now on: a sweep's worker runs seed after seed on one
         simulation this way, without building the maze and devices' settings again. (The
         reset's event does not carry the seed: change it before recording, not during.)"""
+        if self._owner is not None:
+            self._check_thread("reset")
         time, step = self._time, self.frame  # the event says when it was asked for
         if seed is not None:
             self.seed = seed

@@ -6,10 +6,8 @@ import ipaddress
 import logging
 from pathlib import Path
 
-from simmer.config.loader import describe_replies
 from simmer.config.models import SimConfig
 from simmer.ports import STREAM_PORT
-from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import GRACE, StreamServer, TwoPortServer
@@ -27,21 +25,7 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def reply_codec(config: SimConfig) -> ReplyCodec:
-    """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""
-    settings = config.settings
-    if settings.protocol == "packed":
-        return PackedCodec(settings.reply_bytes, settings.str_encoding)
-    return FramedCodec(
-        {spec.id: spec.group[:-1] for spec in config.devices},
-        settings.frame_start,
-        settings.frame_end,
-        settings.round_digits,
-        settings.str_encoding,
-    )
-
-
-class Link:
+class Transports:
     """The two-port server, the stream server and (optionally) the virtual serial port;
     ``lockstep``: served on the lockstep clock (no wall-clock grace anywhere)."""
 
@@ -60,12 +44,12 @@ class Link:
     ) -> None:
         settings = config.settings
         self.host = host if host is not None else settings.host
-        self.protocol = describe_replies(settings)
         if not is_loopback(self.host):
             log.warning(
                 "listening on %s: any machine that can reach it can drive the robot", self.host
             )
-        codec = reply_codec(config)
+        codec = config.reply_codec()
+        self.protocol = codec.describe()
         self.two_port = TwoPortServer(
             bus,
             self.host,
@@ -117,7 +101,7 @@ class Link:
             if server is not None:
                 server.close()
 
-    def __enter__(self) -> Link:
+    def __enter__(self) -> Transports:
         self.start()
         return self
 

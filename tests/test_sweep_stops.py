@@ -1,0 +1,173 @@
+"""A sweep stops cleanly (issue 18, items 2 and 5): SIGINT, SIGTERM or SIGHUP to ``simmer
+sweep`` alone leaves no process of it (its workers, their programs, and the programs' children
+that started sessions of their own), keeps the finished runs and ``--resume`` goes on; after
+``kill -9`` of the sweep its workers notice and exit, with their programs. A ``simmer run
+--program`` stops the program's detached children too."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from simmer.proctree import descendants
+
+pytestmark = [
+    pytest.mark.timeout(240),
+    pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc"),
+]
+
+SIMMER = Path(sys.executable).with_name("simmer")
+PROGRAM = """\
+import os, subprocess, sys
+from pathlib import Path
+
+here = Path(__file__).parent
+# a child in a session of its own: out of the program's process group
+child = subprocess.Popen(["sleep", "100000"], start_new_session=True)
+(here / "pids" / f"child-{child.pid}").write_text("")
+(here / "pids" / f"program-{os.getpid()}").write_text("")
+for slot in range(2):  # the first two runs finish at once; the others run until released
+    try:
+        os.close(os.open(here / f"quick-{slot}", os.O_CREAT | os.O_EXCL))
+        sys.exit(0)
+    except FileExistsError:
+        pass
+while not (here / "release").exists():
+    pass
+"""
+SWEEP = """\
+config = "robot.toml"
+program = "python program.py"
+seeds = 4
+wall_seconds = 600
+"""
+
+
+def wait_for(condition: Callable[[], bool], what: str, bound: float = 90.0) -> None:
+    """Wait until ``condition`` holds, at most ``bound`` wall seconds."""
+    deadline = time.monotonic() + bound
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"still waiting for {what} after {bound:g} s")
+        time.sleep(0.05)
+
+
+def alive(pid: int) -> bool:
+    """Whether ``pid`` is a running process (a zombie has exited)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rfind(")") + 2] != "Z"
+
+
+def in_group(pgid: int) -> list[int]:
+    """Running processes in process group ``pgid``."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            fields = stat[stat.rfind(")") + 2 :].split()
+            if fields[0] != "Z" and int(fields[2]) == pgid:
+                found.append(int(entry.name))
+    return found
+
+
+def pids(folder: Path, kind: str) -> list[int]:
+    return [int(p.name.split("-")[1]) for p in (folder / "pids").glob(f"{kind}-*")]
+
+
+@pytest.fixture
+def sweep_folder(tmp_path: Path) -> Path:
+    (tmp_path / "pids").mkdir()
+    (tmp_path / "program.py").write_text(PROGRAM)
+    (tmp_path / "robot.toml").write_text("")
+    (tmp_path / "sweep.toml").write_text(SWEEP)
+    return tmp_path
+
+
+def start_sweep(folder: Path, *extra: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [SIMMER, "sweep", folder / "sweep.toml", "-o", folder / "results", "--workers=2", *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, to check that none of it is left
+    )
+
+
+def running_sweep(folder: Path) -> tuple[subprocess.Popen[str], set[int]]:
+    """A sweep with two runs finished and two programs looping; it and every process below."""
+    sweep = start_sweep(folder)
+    wait_for(lambda: len(pids(folder, "program")) == 4, "four programs")
+    wait_for(lambda: len(pids(folder, "child")) == 4, "their children")
+    below = descendants(sweep.pid)
+    assert len(below) >= 4  # two workers, two programs (and the resource tracker)
+    return sweep, below | set(pids(folder, "child")) | set(pids(folder, "program"))
+
+
+def assert_all_gone(sweep: subprocess.Popen[str], below: set[int], folder: Path) -> None:
+    wait_for(lambda: not any(alive(pid) for pid in below), "every process of the sweep to go")
+    assert not in_group(sweep.pid)  # by process group: the sweep's own group is empty
+    assert not descendants(sweep.pid)  # by parent: nothing below it
+    assert not any(alive(pid) for pid in pids(folder, "child"))  # the detached children too
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
+    sweep_folder: Path, signum: int
+) -> None:
+    sweep, below = running_sweep(sweep_folder)
+    os.kill(sweep.pid, signum)  # the sweep alone, as `kill` or a closed terminal does
+    _, stderr = sweep.communicate(timeout=90)
+    assert sweep.returncode == 128 + signum, stderr
+    name = signal.Signals(signum).name
+    assert f"stopped ({name})" in stderr
+    assert "--resume goes on" in stderr
+    assert "Traceback" not in stderr
+    assert_all_gone(sweep, below, sweep_folder)
+    results = (sweep_folder / "results" / "results.csv").read_text().splitlines()
+    assert len(results) == 1 + 2  # the header and the two runs that finished
+    (sweep_folder / "release").write_text("")
+    resumed = start_sweep(sweep_folder, "--resume")
+    stdout, stderr = resumed.communicate(timeout=150)
+    assert resumed.returncode == 0, stderr
+    assert "(2 run now" in stdout
+    results = (sweep_folder / "results" / "results.csv").read_text().splitlines()
+    assert len(results) == 1 + 4
+
+
+def test_the_workers_of_a_killed_sweep_exit_with_their_programs(sweep_folder: Path) -> None:
+    sweep, below = running_sweep(sweep_folder)
+    sweep.kill()  # SIGKILL: the sweep cannot clean up; its workers notice it is gone
+    sweep.communicate(timeout=30)
+    assert_all_gone(sweep, below, sweep_folder)
+
+
+def test_a_run_stops_the_children_its_program_detached(tmp_path: Path) -> None:
+    program = tmp_path / "detach.py"
+    program.write_text(
+        "import subprocess, sys\n"
+        "child = subprocess.Popen(['sleep', '100000'], start_new_session=True)\n"
+        f"open({str(tmp_path / 'child')!r}, 'w').write(str(child.pid))\n"
+    )
+    done = subprocess.run(
+        [SIMMER, "run", "--headless", "--program", f"python {program}"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=90,
+    )
+    assert done.returncode == 0, done.stderr
+    child = int((tmp_path / "child").read_text())
+    assert not alive(child)
