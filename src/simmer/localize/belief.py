@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from simmer.geometry import FloatArray
 from simmer.world.events import BeliefEvent, Event, ResetEvent
 
 MAX_PARTICLES = 2000
@@ -41,55 +41,63 @@ MAX_LABELS = 20
 """Labels per show message."""
 MAX_LABEL_CHARS = 40
 """Characters of a label (longer ones are cut)."""
-SHOWS_PER_SECOND = 20
-"""Show messages kept per simulated second; more are dropped whole (and counted): the window
-draws 60 frames a second, and a recording then grows by at most ~1 MB a simulated second."""
+SHOWS_PER_SECOND = 10
+"""Show messages kept per simulated second; more are dropped whole (and counted). Ten beliefs
+a second is smooth to watch, and a recording grows by at most ~0.5 MB a simulated second
+(2,000 particles a show), so its 256 MB hold eight minutes of that."""
 ESTIMATES_PER_SECOND = 60
 """Reported poses kept per simulated second; more are dropped (and counted)."""
 MAX_BELIEF_BYTES = 256 * 1024
 """Longest belief read back from a run folder's events (one at the bounds is ~60 KB)."""
 
-_EMPTY = np.empty((0, 4))
+Float32Array = NDArray[np.float32]
+_EMPTY: Float32Array = np.empty((0, 4), dtype=np.float32)
 _EMPTY.setflags(write=False)
 
 
-def _frozen(array: FloatArray) -> FloatArray:
-    array.setflags(write=False)
-    return array
+def _frozen(array: NDArray[Any]) -> Float32Array:
+    """Kept as float32, read-only: a replay holds every belief shown, in less memory than
+    their JSON took in the run's events (which a recording's size limit bounds)."""
+    kept = array.astype(np.float32)
+    kept.setflags(write=False)
+    return kept
 
 
 @dataclass(frozen=True)
 class Belief:
     """One shown belief, within the bounds (see the module doc); arrays are read-only."""
 
-    particles: FloatArray = field(default_factory=lambda: _EMPTY)
-    """(N, 4): x, y, heading, weight (weights scaled so the heaviest is 1)."""
-    cells: FloatArray | None = None
+    particles: Float32Array = field(default_factory=lambda: _EMPTY)
+    """(N, 4) float32: x, y, heading, weight (weights scaled so the heaviest is 1)."""
+    cells: Float32Array | None = None
     """(rows, cols) probabilities scaled so the largest is 1."""
     pose: tuple[float, float, float] | None = None
     ellipse: tuple[float, float, float] | None = None
-    path: FloatArray = field(default_factory=lambda: _EMPTY[:, :2])
+    path: Float32Array = field(default_factory=lambda: _EMPTY[:, :2])
     labels: tuple[tuple[float, float, str], ...] = ()
 
     def to_json(self) -> str:
-        """The belief as compact JSON (what a run's events keep), numbers to 3 decimals."""
+        """The belief as compact JSON (what a run's events keep): positions to 0.01 in,
+        headings to 0.1 degree, weights and probabilities to 0.001 of the largest."""
         data: dict[str, Any] = {}
         if len(self.particles):
-            data["particles"] = np.round(self.particles, 3).tolist()
+            p = self.particles.astype(np.float64)
+            rounded = (np.round(p[:, :2], 2), np.round(p[:, 2], 1), np.round(p[:, 3], 3))
+            data["particles"] = np.column_stack(rounded).tolist()
         if self.cells is not None:
-            data["cells"] = np.round(self.cells, 4).tolist()
+            data["cells"] = np.round(self.cells.astype(np.float64), 3).tolist()
         if self.pose is not None:
             data["pose"] = [round(v, 3) for v in self.pose]
         if self.ellipse is not None:
             data["ellipse"] = [round(v, 3) for v in self.ellipse]
         if len(self.path):
-            data["path"] = np.round(self.path, 3).tolist()
+            data["path"] = np.round(self.path.astype(np.float64), 2).tolist()
         if self.labels:
             data["labels"] = [[round(x, 3), round(y, 3), text] for x, y, text in self.labels]
         return json.dumps(data, separators=(",", ":"))
 
 
-def _rows(value: Any, width: int, limit: int, name: str) -> tuple[FloatArray, int]:
+def _rows(value: Any, width: int, limit: int, name: str) -> tuple[NDArray[np.float64], int]:
     """``value`` as an (N, width) float array of finite rows, at most ``limit``... (cut count)."""
     if not isinstance(value, list):
         raise ValueError(f"{name} must be a list of [{', '.join(['number'] * width)}] rows")
@@ -118,6 +126,38 @@ def _numbers(value: Any, count: int, name: str) -> tuple[float, ...]:
     return tuple(float(v) for v in value)
 
 
+def _particles(value: Any) -> tuple[Float32Array, int]:
+    """Particles within the bound (the heaviest kept), weights scaled to a largest of 1."""
+    particles, cut = _rows(value, 4, MAX_PARTICLES, "particles")
+    particles[:, 3] = np.clip(particles[:, 3], 0.0, None)
+    if len(particles) > MAX_PARTICLES:
+        keep = np.argpartition(-particles[:, 3], MAX_PARTICLES - 1)[:MAX_PARTICLES]
+        cut += len(particles) - MAX_PARTICLES
+        particles = particles[np.sort(keep)]
+    top = particles[:, 3].max() if len(particles) else 0.0
+    if top > 0:
+        particles[:, 3] /= top
+    return _frozen(particles), cut
+
+
+def _cells(grid: Any) -> Float32Array:
+    """A grid of probabilities (not finite or negative: 0), scaled to a largest of 1."""
+    if not isinstance(grid, list) or not grid or not isinstance(grid[0], list):
+        raise ValueError("cells must be a grid: a list of rows of probabilities")
+    if len(grid) * len(grid[0]) > MAX_CELLS or len(grid) > MAX_CELLS:
+        raise ValueError(f"cells: a grid of at most {MAX_CELLS} probabilities")
+    try:
+        cells = np.array(grid, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("cells must be rows of equal length, of numbers") from None
+    if cells.ndim != 2:
+        raise ValueError("cells must be rows of equal length, of numbers")
+    cells = np.nan_to_num(cells, nan=0.0, posinf=0.0, neginf=0.0).clip(0.0, None)
+    if cells.max() > 0:
+        cells /= cells.max()
+    return _frozen(cells)
+
+
 def read_belief(data: Any) -> tuple[Belief, int]:
     """The belief in parsed JSON ``data`` and how many points were cut to fit the bounds;
     ValueError (one line) if ``data`` is not a belief."""
@@ -129,43 +169,15 @@ def read_belief(data: Any) -> tuple[Belief, int]:
             f"unknown key {sorted(unknown)[0]!r} in a belief; the keys are particles, cells, "
             "pose, ellipse, path and labels"
         )
-    cut = 0
-    particles = _EMPTY
-    if "particles" in data:
-        particles, cut = _rows(data["particles"], 4, MAX_PARTICLES, "particles")
-        particles[:, 3] = np.clip(particles[:, 3], 0.0, None)
-        if len(particles) > MAX_PARTICLES:
-            keep = np.argpartition(-particles[:, 3], MAX_PARTICLES - 1)[:MAX_PARTICLES]
-            cut += len(particles) - MAX_PARTICLES
-            particles = particles[np.sort(keep)]
-        top = particles[:, 3].max() if len(particles) else 0.0
-        if top > 0:
-            particles[:, 3] /= top
-        particles = _frozen(particles)
-    cells = None
-    if "cells" in data:
-        grid = data["cells"]
-        if not isinstance(grid, list) or not grid or not isinstance(grid[0], list):
-            raise ValueError("cells must be a grid: a list of rows of probabilities")
-        if len(grid) * len(grid[0]) > MAX_CELLS or len(grid) > MAX_CELLS:
-            raise ValueError(f"cells: a grid of at most {MAX_CELLS} probabilities")
-        try:
-            cells = np.array(grid, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError("cells must be rows of equal length, of numbers") from None
-        if cells.ndim != 2:
-            raise ValueError("cells must be rows of equal length, of numbers")
-        cells = np.nan_to_num(cells, nan=0.0, posinf=0.0, neginf=0.0).clip(0.0, None)
-        if cells.max() > 0:
-            cells /= cells.max()
-        cells = _frozen(cells)
+    particles, cut = _particles(data["particles"]) if "particles" in data else (_EMPTY, 0)
+    cells = _cells(data["cells"]) if "cells" in data else None
     pose = _numbers(data["pose"], 3, "pose") if "pose" in data else None
     ellipse = _numbers(data["ellipse"], 3, "ellipse") if "ellipse" in data else None
     path = _EMPTY[:, :2]
     if "path" in data:
-        path, cut_path = _rows(data["path"], 2, MAX_PATH, "path")
-        cut += cut_path + max(0, len(path) - MAX_PATH)
-        path = _frozen(path[:MAX_PATH])
+        points, cut_path = _rows(data["path"], 2, MAX_PATH, "path")
+        cut += cut_path + max(0, len(points) - MAX_PATH)
+        path = _frozen(points[:MAX_PATH])
     labels: list[tuple[float, float, str]] = []
     raw = data.get("labels", [])
     if not isinstance(raw, list):

@@ -14,6 +14,8 @@ from simmer.ui.scene import View, tint
 
 BELIEF_COLOR: Color = (140, 40, 200)
 """The belief's colour: purple, unlike anything the simulator draws of the truth."""
+ESTIMATE_COLOR: Color = (230, 0, 140)
+"""The pose estimate and its ellipse: magenta, over the purple cloud."""
 PATH_COLOR: Color = (40, 90, 220)
 PARTICLE_LENGTH = 1.5
 """Inches of a particle's heading tick."""
@@ -31,7 +33,9 @@ def paint_belief(r: Renderer, view: View, belief: Belief, size: tuple[float, flo
                 half = 0.45 * side * math.sqrt(p)
                 r.draw_rect((x - half, y - half, 2 * half, 2 * half), tint(BELIEF_COLOR, 0.55))
     if len(belief.path) >= 2:
-        r.draw_lines(view.points(belief.path), PATH_COLOR, max(1, round(view.ppi / 8)))
+        r.draw_lines(
+            view.points(belief.path.astype(np.float64)), PATH_COLOR, max(1, round(view.ppi / 8))
+        )
     particles = belief.particles
     if len(particles):
         ppi, ox, oy = view.ppi, view.ox, view.oy
@@ -52,11 +56,11 @@ def paint_belief(r: Renderer, view: View, belief: Belief, size: tuple[float, flo
             c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
             ex, ey = a * np.cos(t), b * np.sin(t)
             ring = np.column_stack((x + ex * c - ey * s, y + ex * s + ey * c))
-            r.draw_polygon(view.points(ring), BELIEF_COLOR, 2)
+            r.draw_polygon(view.points(ring), ESTIMATE_COLOR, 3)
         h = math.radians(heading)
         tip = view.point(x - 2.5 * math.sin(h), y + 2.5 * math.cos(h))
-        r.draw_circle(centre, max(3.0, 0.6 * view.ppi), BELIEF_COLOR, 2)
-        r.draw_segment(centre, tip, BELIEF_COLOR, 3)
+        r.draw_circle(centre, max(3.0, 0.6 * view.ppi), ESTIMATE_COLOR, 3)
+        r.draw_segment(centre, tip, ESTIMATE_COLOR, 3)
     size_px = max(16, round(view.ppi * 1.1))
     for x, y, text in belief.labels:
         r.draw_text(text, view.point(x, y), BELIEF_COLOR, size_px, centered=True)
