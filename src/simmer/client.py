@@ -381,7 +381,8 @@ class Client:
         (the 2 x 2 covariance of x and y: a 2-sigma ellipse); ``path``: rows of x, y;
         ``labels``: (x, y, text). Returns how many points were cut to fit the bounds
         (docs/localization.md; -1: the message was dropped, over the shows a simulated
-        second); a cut is logged, at most once a wall second.
+        second); a cut is logged, at most once a wall second. ValueError if the simulator
+        refuses the belief (a grid of over 4,096 cells), with its reason.
         """
         data: list[str] = []
         rows = [row for row in _rows(particles) if all(map(math.isfinite, row))]
@@ -414,6 +415,8 @@ class Client:
         if cut:
             self._log_cut(cut)
         (value,) = self._ask(head + "}")[0] or [math.nan]
+        if math.isnan(value):
+            raise ValueError(f"the simulator refused the belief: {self.explain() or 'see its log'}")
         return cut + int(value) if value >= 0 else -1
 
     def report_pose(self, x: float, y: float, heading: float) -> bool:
