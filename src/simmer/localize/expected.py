@@ -17,14 +17,7 @@ import numba
 import numpy as np
 
 from simmer.devices.sensors import _DISK, Compass, Infrared, Ultrasonic
-from simmer.geometry import (
-    BoolArray,
-    FloatArray,
-    ray_grid,
-    ray_segments,
-    white_fraction,
-    wrap_degrees,
-)
+from simmer.geometry import BoolArray, FloatArray, cast_fan, white_fraction, wrap_degrees
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
@@ -50,8 +43,8 @@ def _fans(
 
     ``mount``: x, y, rotation, beamwidth, min_range, max_range, height above the block's top
     (``block_xy[2]`` > 0: the block is there to be seen). The arithmetic is
-    :meth:`~simmer.devices.base.Device.world_pose`'s and :func:`~simmer.geometry.cast_fan`'s,
-    step for step, so the readings are the sensor's own to the last bit.
+    :meth:`~simmer.devices.base.Device.world_pose`'s, then :func:`~simmer.geometry.cast_fan`
+    itself, so the readings are the sensor's own to the last bit.
     """
     px, py, rotation, beamwidth, low, high, above = (
         mount[0],
@@ -64,6 +57,7 @@ def _fans(
     )
     with_block = block_xy[2] > 0.0
     for i in numba.prange(poses.shape[0]):
+        scratch = np.empty(rays)  # each thread its own rays
         rx, ry, rh = poses[i, 0], poses[i, 1], poses[i, 2]
         rad = math.radians(rh)
         c, s = math.cos(rad), math.sin(rad)
@@ -74,19 +68,9 @@ def _fans(
         if with_block:
             d = math.hypot(block_xy[0] - ox, block_xy[1] - oy)
             sees = math.degrees(math.atan2(above, d)) <= beamwidth / 2.0
-        best = math.inf
-        for k in range(rays):
-            angle = math.radians(heading + ((k - (rays - 1) / 2.0) / rays) * beamwidth)
-            dx = -math.sin(angle)
-            dy = math.cos(angle)
-            t = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, high)
-            if t < 0.0:
-                t = ray_segments(ox, oy, dx, dy, fallback)
-            if sees:
-                t = min(t, ray_segments(ox, oy, dx, dy, block))
-            if t > high:
-                t = math.inf
-            best = min(best, t)
+        best = cast_fan(
+            hwall, vwall, cell, fallback, block, sees, ox, oy, heading, beamwidth, high, scratch
+        )
         out[i] = high if best == math.inf else min(max(best, low), high)
 
 
