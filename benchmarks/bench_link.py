@@ -34,13 +34,13 @@ SERVER = """
 import json, os, sys, threading
 if len(sys.argv) > 2:
     os.sched_setaffinity(0, {int(sys.argv[2])})
+from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.world import Simulation
 sim = Simulation.from_config()
 runner = Runner(sim, speed=None if sys.argv[1] == "max" else float(sys.argv[1]))
-ports = {"port_rx": 0, "port_tx": 0, "stream_port": 0}
-with Transports(runner.bus, sim.config, serial=True, **ports) as link:
+with Transports(runner.bus, sim.config, RunOptions.free_ports(serial=True)) as link:
     print(json.dumps({"stream": link.stream.port, "rx": link.two_port.port_rx,
                       "tx": link.two_port.port_tx, "serial": link.serial.path}), flush=True)
     stop = threading.Event()

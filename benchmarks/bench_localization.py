@@ -27,6 +27,7 @@ import pygame
 from simmer import Simulation
 from simmer.client import connect
 from simmer.localize.expected import parse_headings, table
+from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.ui.maker import LocalControls, SnapshotMaker
@@ -84,7 +85,7 @@ def bench_show(shows: int = 50) -> float:
     sim = Simulation.from_config()
     runner = Runner(sim, speed=None)
     stop = threading.Event()
-    link = Transports(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0)
+    link = Transports(runner.bus, sim.config, RunOptions.free_ports())
     thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     cloud = particles(2000)
     with link:

@@ -24,6 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from simmer import Simulation
+from simmer.options import RunOptions
 from simmer.serve import serve
 from simmer.sweep import build_config
 
@@ -75,15 +76,8 @@ def run_seconds(command: str, sim: Simulation) -> float:
     with quiet():
         served = serve(
             sim,
-            window=False,
-            speed=None,
-            port_rx=0,
-            port_tx=0,
-            stream_port=0,
+            RunOptions.free_ports(speed=None, program=command, timeout=120, clock="lockstep"),
             echo=lambda _line: None,
-            program=command,
-            lockstep=True,
-            timeout=120,
         )
     seconds = time.perf_counter() - started
     if served.exit_status != 0:

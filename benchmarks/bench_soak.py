@@ -16,6 +16,7 @@ import threading
 from pathlib import Path
 
 from simmer import Simulation
+from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport.transports import Transports
 from simmer.world.outcome import Outcome
@@ -37,7 +38,7 @@ def soak() -> dict[int, float]:
     sim = Simulation.from_config()
     Outcome.attach(sim)
     runner = Runner(sim, speed=None)
-    link = Transports(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0)
+    link = Transports(runner.bus, sim.config, RunOptions.free_ports())
     stop = threading.Event()
     loop = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     found = {}

@@ -33,6 +33,7 @@ import pygame
 
 from simmer import Simulation
 from simmer.client import Client, connect
+from simmer.options import RunOptions
 from simmer.runner import LocalLink, Runner
 from simmer.transport import Transports
 from simmer.ui import Bridge, Window
@@ -116,7 +117,7 @@ def measure_latency(count: int = 600) -> tuple[float, float, float, float, str]:
             stop.set()
 
     try:
-        with Transports(runner.bus, sim.config, port_rx=0, port_tx=0, stream_port=0) as link:
+        with Transports(runner.bus, sim.config, RunOptions.free_ports()) as link:
             thread = threading.Thread(target=program, args=(link.stream.port,))
             thread.start()
             window.run(runner, stop=stop)

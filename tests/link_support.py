@@ -9,6 +9,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.world import Simulation
@@ -27,15 +28,8 @@ def serving(
     sim = sim if sim is not None else Simulation.from_config()
     runner = Runner(sim, speed=speed)
     stop = threading.Event()
-    link = Transports(
-        runner.bus,
-        sim.config,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
-        serial=serial,
-        serial_link=serial_link,
-    )
+    options = RunOptions.free_ports(serial=serial, serial_link=serial_link)
+    link = Transports(runner.bus, sim.config, options)
     thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     with link:
         thread.start()

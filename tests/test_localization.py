@@ -25,6 +25,7 @@ from simmer.geometry import Pose
 from simmer.localize.belief import MAX_PARTICLES, SHOWS_PER_SECOND, BeliefBoard, parse_belief
 from simmer.localize.expected import SUPPORTED, parse_headings, table
 from simmer.localize.metrics import LocalizationReport, Tracker, errors, localized_at
+from simmer.options import RunOptions
 from simmer.protocol import FRAME_HEADER
 from simmer.record.eventlog import read_events
 from simmer.runner import LocalLink
@@ -295,18 +296,13 @@ def example_run(tmp_path: Path, *options: str, record: Path | None = None) -> li
     events: list[Event] = []
     sim.add_observer(events.append)
     config = EXAMPLES / "lab1_rover.toml"
+    program = f"{sys.executable} {EXAMPLE} {config} --sensors u0 --moves 5 {' '.join(options)}"
     served = serve(
         sim,
-        window=False,
-        speed=None,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
+        RunOptions.free_ports(
+            speed=None, program=program, timeout=120, clock="lockstep", record=record
+        ),
         echo=lambda _line: None,
-        program=f"{sys.executable} {EXAMPLE} {config} --sensors u0 --moves 5 {' '.join(options)}",
-        lockstep=True,
-        timeout=120,
-        record=record,
     )
     assert served.ended_by == "program"
     assert served.exit_status == 0

@@ -14,6 +14,7 @@ import pytest
 from simmer import Simulation
 from simmer.client import Client
 from simmer.lockstep import runs_python
+from simmer.options import RunOptions
 from simmer.runner import LocalLink
 from simmer.serve import Served, serve
 from simmer.world.events import CommandEvent, Event, StepEvent
@@ -55,16 +56,10 @@ def lockstep_run(sim: Simulation, program: str, speed: float | None, serial: boo
     """``simmer run --headless --program PROGRAM`` on free ports; the program must succeed."""
     served = serve(
         sim,
-        window=False,
-        speed=speed,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
-        serial=serial,
+        RunOptions.free_ports(
+            speed=speed, serial=serial, program=program, timeout=120, clock="lockstep"
+        ),
         echo=lambda _line: None,
-        program=program,
-        lockstep=True,
-        timeout=120,
     )
     assert served.ended_by == "program"
     assert served.exit_status == 0
@@ -180,15 +175,10 @@ def test_a_program_that_is_not_python_is_told_so() -> None:
     said: list[str] = []
     served = serve(
         Simulation.from_config(),
-        window=False,
-        speed=None,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
+        RunOptions.free_ports(
+            speed=None, program="/bin/sh -c 'exit 0'", timeout=60, clock="lockstep"
+        ),
         echo=said.append,
-        program="/bin/sh -c 'exit 0'",
-        lockstep=True,
-        timeout=60,
     )
     assert served.exit_status == 0
     assert any("does not look like a Python program" in line for line in said), said

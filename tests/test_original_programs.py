@@ -24,6 +24,7 @@ from typing import Any
 import pytest
 
 from simmer import Simulation
+from simmer.options import RunOptions
 from simmer.record.eventlog import event_line
 from simmer.serve import serve
 from simmer.sweep import run_sweep, sweep_from_dict
@@ -64,15 +65,13 @@ def run_student_program(pattern: str, release: str, capfd: pytest.CaptureFixture
     events = EventHash(sim)
     served = serve(
         sim,
-        window=False,
-        speed=None,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
+        RunOptions.free_ports(
+            speed=None,
+            program=f"{sys.executable} {STUDENT} {pattern} {release}",
+            timeout=120,
+            clock="lockstep",
+        ),
         echo=lambda _line: None,
-        program=f"{sys.executable} {STUDENT} {pattern} {release}",
-        lockstep=True,
-        timeout=120,
     )
     printed = capfd.readouterr().out
     assert (served.ended_by, served.exit_status) == ("program", 0), printed
@@ -100,15 +99,13 @@ def test_a_message_sent_before_a_sleep_is_taken_before_the_sleep(
     sim.add_observer(seen.append)
     serve(
         sim,
-        window=False,
-        speed=None,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
+        RunOptions.free_ports(
+            speed=None,
+            program=f"{sys.executable} {STUDENT} dead_reckoning 1.1",
+            timeout=120,
+            clock="lockstep",
+        ),
         echo=lambda _line: None,
-        program=f"{sys.executable} {STUDENT} dead_reckoning 1.1",
-        lockstep=True,
-        timeout=120,
     )
     capfd.readouterr()
     taken = [(e.step, e.message) for e in seen if isinstance(e, CommandEvent)]
@@ -132,15 +129,10 @@ def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
     sim = Simulation.from_config()
     served = serve(
         sim,
-        window=False,
-        speed=None,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
+        RunOptions.free_ports(
+            speed=None, program=f"{sys.executable} {program}", timeout=60, clock="lockstep"
+        ),
         echo=lambda _line: None,
-        program=f"{sys.executable} {program}",
-        lockstep=True,
-        timeout=60,
     )
     assert (served.ended_by, served.exit_status) == ("program", 0)
     assert "2 byte(s) the program wrote before 'sleep' never arrived" in caplog.text

@@ -16,6 +16,7 @@ import pytest
 from PIL import Image
 
 from simmer import Simulation
+from simmer.options import RunOptions
 from simmer.record.plots import plot_run
 from simmer.record.runfolder import load_run, retrace
 from simmer.serve import serve
@@ -92,10 +93,17 @@ def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     sim = Simulation.from_config(EXAMPLES / "project.toml", seed=21)
     served = serve(
-        sim, window=False, speed=None, port_rx=0, port_tx=0, stream_port=0,
-        echo=lambda _line: None, program=PROGRAM, lockstep=True, timeout=120,
-        record=folder, answer=sim.scenario.target,
-    )  # fmt: skip
+        sim,
+        RunOptions.free_ports(
+            speed=None,
+            program=PROGRAM,
+            timeout=120,
+            record=folder,
+            answer=sim.scenario.target,
+            clock="lockstep",
+        ),
+        echo=lambda _line: None,
+    )
     assert served.ended_by == "program"
     assert served.exit_status == 0
     report = json.loads((folder / "report.json").read_text())

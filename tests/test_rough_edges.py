@@ -22,6 +22,7 @@ from simmer.config import config_from_toml, load_config
 from simmer.config.convert import convert_simmer_py
 from simmer.console import HELP, run_console
 from simmer.errors import ConfigError, ConfigIssue
+from simmer.options import RunOptions
 from simmer.protocol import Decoded, parse_command, printable
 from simmer.runner import Runner
 from simmer.serve import serve
@@ -216,8 +217,11 @@ def test_the_window_says_one_thing_when_no_screen_is_found(
 ) -> None:
     said: list[str] = []
     with caplog.at_level(logging.WARNING, logger="simmer.ui"):
-        serve(Simulation.from_config(), window=True, speed=None, seconds=0.1, echo=said.append,
-              port_rx=0, port_tx=0, stream_port=0)  # fmt: skip
+        serve(
+            Simulation.from_config(),
+            RunOptions.free_ports(window=True, speed=None, seconds=0.1),
+            echo=said.append,
+        )
     assert "no screen found" in caplog.text
     assert not any("window open" in line for line in said)
     # with a screen, the window says it is open
@@ -225,8 +229,11 @@ def test_the_window_says_one_thing_when_no_screen_is_found(
 
     monkeypatch.setattr(window.pygame.display, "get_driver", lambda: "x11")
     said.clear()
-    serve(Simulation.from_config(), window=True, speed=None, seconds=0.1, echo=said.append,
-          port_rx=0, port_tx=0, stream_port=0)  # fmt: skip
+    serve(
+        Simulation.from_config(),
+        RunOptions.free_ports(window=True, speed=None, seconds=0.1),
+        echo=said.append,
+    )
     assert "window open (press h for help)" in said
 
 

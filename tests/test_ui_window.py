@@ -25,6 +25,7 @@ from simmer import Simulation
 from simmer.client import connect
 from simmer.geometry import Pose
 from simmer.localize.messages import Localization
+from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.ui import Bridge, Window, run_window
@@ -456,7 +457,7 @@ def serve_with_window(
 ) -> threading.Thread:
     """Serve the persistent protocol and run ``window`` (this thread) with ``runner`` (its own
     thread) while ``program(port)`` runs in a third; tear everything down; return that thread."""
-    link = Transports(runner.bus, runner.sim.config, port_rx=0, port_tx=0, stream_port=0)
+    link = Transports(runner.bus, runner.sim.config, RunOptions.free_ports())
     with link:
         thread = threading.Thread(target=program, args=(link.stream.port,))
         thread.start()

@@ -525,6 +525,7 @@ def run(
     if answer is not None and sim.scenario.target is not None:
         answer = answer.replace("{target}", sim.scenario.target)
     from simmer.errors import SimmerError
+    from simmer.options import RunOptions
     from simmer.serve import serve
 
     if record is not None:
@@ -543,27 +544,26 @@ def run(
     log_file = _log_to_file() if program is not None else None
     if log_file is not None:
         out.print(f"the simulator's log goes to {log_file}", markup=False)
+    free = {name: 0 for name, value in (("port_rx", port_rx), ("port_tx", port_tx)) if value == 0}
+    options = RunOptions.for_config(
+        sim.config,
+        stream_port=STREAM_PORT if port is None else port,
+        serial=serial,
+        serial_link=serial_link,
+        window=not headless,
+        speed=pace,
+        clock="lockstep" if lockstep else "realtime",
+        link_delay=link_delay,
+        seconds=seconds,
+        program=program,
+        answer=answer,
+        timeout=timeout,
+        record=record,
+        record_limit=int(record_limit * 2**20),
+        video=video,
+    ).replace(**free)
     try:
-        served = serve(
-            sim,
-            window=not headless,
-            speed=pace,
-            seconds=seconds,
-            port_rx=port_rx,
-            port_tx=port_tx,
-            stream_port=STREAM_PORT if port is None else port,
-            serial=serial,
-            serial_link=serial_link,
-            echo=lambda line: out.print(line, markup=False),
-            program=program,
-            lockstep=lockstep,
-            link_delay=link_delay,
-            timeout=timeout,
-            record=record,
-            video=video,
-            answer=answer,
-            record_limit=int(record_limit * 2**20),
-        )
+        served = serve(sim, options, echo=lambda line: out.print(line, markup=False))
     except SimmerError as exc:
         err.print(f"[bold red]{exc}[/]")
         raise typer.Exit(1) from None

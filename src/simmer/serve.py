@@ -10,7 +10,6 @@ import signal
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
@@ -22,11 +21,11 @@ from simmer.lockstep import (
     program_environment,
     runs_python,
 )
+from simmer.options import RunOptions
 from simmer.proctree import descendants, stop_strays
-from simmer.record import RunRecorder, RunSetup
-from simmer.record.eventlog import MAX_RECORDING_BYTES
+from simmer.record import RunRecorder
 from simmer.runner import Runner
-from simmer.transport import STREAM_PORT, Transports
+from simmer.transport import Transports
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
@@ -115,33 +114,13 @@ class Served:
         return 0
 
 
-def serve(
-    sim: Simulation,
-    *,
-    window: bool,
-    speed: float | None = 1.0,
-    seconds: float | None = None,
-    host: str | None = None,
-    port_rx: int | None = None,
-    port_tx: int | None = None,
-    stream_port: int = STREAM_PORT,
-    serial: bool = False,
-    serial_link: Path | None = None,
-    echo: Callable[[str], None] = print,
-    program: str | None = None,
-    lockstep: bool = False,
-    link_delay: float | None = None,
-    timeout: float | None = None,
-    record: Path | None = None,
-    video: Path | None = None,
-    answer: str | None = None,
-    record_limit: int = MAX_RECORDING_BYTES,
-) -> Served:
+def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = print) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
     program's command line, started here on this run's ports) exits, or ``timeout`` wall
-    seconds pass; with a window or headless, in real time or in ``lockstep``. With ``record``
-    (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
+    seconds pass; with a window or headless, in real time or in lockstep, all as ``options``
+    say (:class:`~simmer.options.RunOptions`); what it does is said through ``echo``. With
+    ``record`` (a folder), the run is recorded there (:class:`~simmer.record.RunRecorder`) until it
     ends, however it ends. With ``video`` (an .mp4 or .gif file), what the window shows is
     recorded there at 30 frames per simulated second (:class:`~simmer.ui.video.VideoRecorder`),
     with a window or headless, and the file is finished however the run ends. A recording
@@ -156,7 +135,8 @@ def serve(
     :class:`~simmer.errors.SimmerError` if no window can be opened or something is already at
     ``serial_link``.
     """
-    runner = Runner(sim, speed=speed, lockstep=lockstep, link_delay=link_delay)
+    o = options
+    runner = Runner(sim, speed=o.speed, lockstep=o.lockstep, link_delay=o.link_delay)
     outcome = Outcome.attach(sim)
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
@@ -167,59 +147,43 @@ def serve(
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
     try:
-        transports = Transports(
-            runner.bus,
-            sim.config,
-            host=host,
-            port_rx=port_rx,
-            port_tx=port_tx,
-            stream_port=stream_port,
-            serial=serial,
-            serial_link=serial_link,
-            lockstep=lockstep,
-        )
+        transports = Transports(runner.bus, sim.config, o)
         with transports:
-            if record is not None:
-                clock = "lockstep" if lockstep else "realtime"
-                delay = runner.link_delay if lockstep else None
-                setup = RunSetup(clock, speed, delay, program, window)
-                recorder = RunRecorder(
-                    sim, record, setup, outcome, max_bytes=record_limit, on_stop=_say(echo)
-                )
-                echo(f"recording the run into {record}")
-            if video is not None:
+            if o.record is not None:
+                used = o.replace(link_delay=runner.link_delay if o.lockstep else None)
+                recorder = RunRecorder(sim, o.record, used, outcome, on_stop=_say(echo))
+                echo(f"recording the run into {o.record}")
+            if o.video is not None:
                 from simmer.ui.video import VideoRecorder
 
-                filming = VideoRecorder(sim, video, controls=runner)
-                echo(f"recording a video into {video}")
+                filming = VideoRecorder(sim, o.video, controls=runner)
+                echo(f"recording a video into {o.video}")
             for line in transports.describe():
                 echo(line)
-            if lockstep:
+            if o.lockstep:
                 echo(
                     f"lockstep clock: simulated time advances only when the program sleeps, "
                     f"and {runner.link_delay:g} s per message"
                 )
-                if program is not None and not runs_python(program):
-                    echo(NOT_PYTHON.format(command=program))
-            if program is not None:
+                if o.program is not None and not runs_python(o.program):
+                    echo(NOT_PYTHON.format(command=o.program))
+            if o.program is not None:
                 before = descendants()
-                started = _start_program(
-                    program, transports, sim.config, runner.bus, stop, ended, timeout, echo, answer
-                )
-                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, program))
-            if window:
+                started = _start_program(o, transports, sim.config, runner.bus, stop, ended, echo)
+                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, o.program))
+            if o.window:
                 from simmer.ui import run_window
 
-                run_window(runner, until=seconds, stop=stop, echo=echo)
+                run_window(runner, until=o.seconds, stop=stop, echo=echo)
             else:
-                pace = "as fast as possible" if speed is None else f"{speed:g}x real time"
+                pace = "as fast as possible" if o.speed is None else f"{o.speed:g}x real time"
                 echo(f"running headless, {pace}; Ctrl-C to stop")
-                runner.run(stop_event=stop, until=seconds)
+                runner.run(stop_event=stop, until=o.seconds)
             if signalled:
                 echo(f"stopped ({signalled[0]})")
                 ended.insert(0, "quit")
             elif not ended:
-                limit = seconds is not None and sim.time >= seconds - 1e-9
+                limit = o.seconds is not None and sim.time >= o.seconds - 1e-9
                 ended.append("seconds" if limit else "quit")
     except KeyboardInterrupt:
         echo("stopped")
@@ -268,18 +232,16 @@ def _finish_video(filming: VideoRecorder, echo: Callable[[str], None]) -> None:
 
 
 def _start_program(
-    command: str,
+    options: RunOptions,
     transports: Transports,
     config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
     ended: list[str],
-    timeout: float | None,
     echo: Callable[[str], None],
-    answer: str | None = None,
 ) -> Program:
-    """Start the control program on this run's ports; a thread ends the run when it exits or
-    at the wall-clock ``timeout`` (then stopping its whole process tree)."""
+    """Start the control program of ``options`` on this run's ports; a thread ends the run
+    when it exits or at the wall-clock ``timeout`` (then stopping its whole process tree)."""
     ports = {
         "port_rx": transports.two_port.port_rx,
         "port_tx": transports.two_port.port_tx,
@@ -290,7 +252,9 @@ def _start_program(
     env = program_environment(ports, transports.host, configured=configured)
     if transports.serial is not None:
         env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
-    program = Program.start(command, env, answer)
+    assert options.program is not None
+    command, timeout = options.program, options.timeout
+    program = Program.start(command, env, options.answer)
     echo(f"started the program: {command}")
 
     def watch() -> None:

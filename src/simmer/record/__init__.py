@@ -8,7 +8,6 @@ from simmer.record.eventlog import EventLog, read_events
 from simmer.record.runfolder import (
     LoadedRun,
     RunRecorder,
-    RunSetup,
     load_run,
     read_manifest,
     retrace,
@@ -21,7 +20,6 @@ __all__ = [
     "EventLog",
     "LoadedRun",
     "RunRecorder",
-    "RunSetup",
     "TraceWriter",
     "load_run",
     "read_events",

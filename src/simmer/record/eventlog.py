@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any, get_type_hints
 
 from simmer.geometry import Pose
+from simmer.options import MAX_RECORDING_BYTES
 from simmer.world.events import (
     BeliefEvent,
     CollisionEndEvent,
@@ -62,11 +63,6 @@ TYPE_NAMES: dict[type[Event], str] = {
 EVENT_TYPES = {name: cls for cls, name in TYPE_NAMES.items()}
 NOT_FINITE = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf}
 """How a float that JSON cannot hold is written, and what it reads back as."""
-MAX_RECORDING_BYTES = 256 * 1024 * 1024
-"""Bytes a recording's ``events.jsonl`` and ``trace.csv`` hold together (and the most of either
-that is read back). An hour of a lockstep program sending a message every step is some 30 MB;
-past the limit the recording stops (the run goes on) rather than fill the disk, and a replay
-reads no file larger."""
 
 
 class RecordingBudget:

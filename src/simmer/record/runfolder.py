@@ -28,7 +28,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from contextlib import suppress
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from datetime import datetime
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -40,8 +40,8 @@ from simmer.config.models import SimConfig
 from simmer.config.validate import config_from_dict
 from simmer.errors import ReplayError
 from simmer.geometry import Pose, wrap_degrees
+from simmer.options import MAX_RECORDING_BYTES, RunOptions
 from simmer.record.eventlog import (
-    MAX_RECORDING_BYTES,
     EventLog,
     RecordingBudget,
     read_events,
@@ -83,22 +83,6 @@ ENDINGS = {
     "closed": "the recording was closed",
 }
 """How a run ended, in words, by :attr:`simmer.serve.Served.ended_by` (and two of its own)."""
-
-
-@dataclass(frozen=True)
-class RunSetup:
-    """How a run is driven, for the manifest. The defaults describe a simulation that Python
-    code steps itself."""
-
-    clock: str | None = None
-    """``realtime`` or ``lockstep`` (``simmer run``); None: stepped from Python."""
-    speed: float | None = None
-    """Multiple of real time; None: as fast as possible (or no clock)."""
-    link_delay: float | None = None
-    """Lockstep: simulated seconds each message costs."""
-    program: str | None = None
-    """The control program's command line (``--program``)."""
-    window: bool = False
 
 
 class LoadedRun(NamedTuple):
@@ -242,8 +226,9 @@ def library_versions() -> dict[str, str]:
     return found
 
 
-def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, Any]:
-    """What a run folder says about its run before it starts."""
+def manifest(sim: Simulation, options: RunOptions | None, started: datetime) -> dict[str, Any]:
+    """What a run folder says about its run before it starts (``options``: how it is served;
+    None: a simulation Python code steps itself, with no clock)."""
     sensors = sensor_ids(sim.config)
     return {
         "format": FORMAT,
@@ -251,11 +236,11 @@ def manifest(sim: Simulation, setup: RunSetup, started: datetime) -> dict[str, A
         "started": started.isoformat(timespec="seconds"),
         "seed": sim.seed,
         "scenario": sim.scenario.as_dict(),
-        "clock": setup.clock,
-        "speed": setup.speed,
-        "link_delay": setup.link_delay,
-        "program": setup.program,
-        "window": setup.window,
+        "clock": options and options.clock,
+        "speed": options and options.speed,
+        "link_delay": options and options.link_delay,
+        "program": options and options.program,
+        "window": bool(options and options.window),
         "argv": sys.argv,
         "platform": {
             "python": platform.python_version(),
@@ -509,9 +494,11 @@ class RunRecorder:
             sim.command("w0-12")
             sim.run_until_idle()
 
-    ``outcome``: the run's :class:`~simmer.world.outcome.Outcome` if it has one already
-    (otherwise the recorder attaches its own, until :meth:`close`). ``max_bytes``: what
-    events.jsonl and trace.csv may hold together. If they reach it, or the disk fills, the
+    ``options``: how the run is served, for the manifest (None: Python code steps the
+    simulation itself). ``outcome``: the run's :class:`~simmer.world.outcome.Outcome` if it
+    has one already (otherwise the recorder attaches its own, until :meth:`close`).
+    ``max_bytes``: what events.jsonl and trace.csv may hold together (default: the options'
+    ``record_limit``). If they reach it, or the disk fills, the
     recording stops (each file at its last whole line) and the run goes on: :attr:`stopped`
     says why and ``on_stop`` is called with "the recording in DIR stopped: ...". Raises
     ValueError if ``sim`` has already stepped (a recording starts at the first step, or it
@@ -522,10 +509,10 @@ class RunRecorder:
         self,
         sim: Simulation,
         folder: str | Path,
-        setup: RunSetup | None = None,
+        options: RunOptions | None = None,
         outcome: Outcome | None = None,
         *,
-        max_bytes: int = MAX_RECORDING_BYTES,
+        max_bytes: int | None = None,
         on_stop: Callable[[str], None] | None = None,
     ) -> None:
         if sim.frame != 0:
@@ -535,7 +522,9 @@ class RunRecorder:
             )
         self.sim = sim
         self.folder = prepare_folder(folder)
-        self.setup = setup or RunSetup()
+        self.options = options
+        if max_bytes is None:
+            max_bytes = MAX_RECORDING_BYTES if options is None else options.record_limit
         self._own_outcome = outcome is None
         self.outcome = Outcome.attach(sim) if outcome is None else outcome
         self._wall_start = time.monotonic()
@@ -544,7 +533,7 @@ class RunRecorder:
         """Why the recording stopped before the run ended ("the recording in DIR stopped:
         disk full"), or None."""
         self._on_stop = on_stop
-        _write_json(self.folder / MANIFEST, manifest(sim, self.setup, self.started))
+        _write_json(self.folder / MANIFEST, manifest(sim, options, self.started))
         budget = RecordingBudget(max_bytes)
         self.events = EventLog(self.folder / EVENTS, budget, self._stop)
         settings = sim.config.settings
@@ -583,7 +572,7 @@ class RunRecorder:
             "simmer_version": simmer.__version__,
             "config": sim.config.source,
             "seed": sim.seed,
-            "clock": self.setup.clock,
+            "clock": self.options and self.options.clock,
             "duration": sim.time,
             "steps": sim.frame,
             "wall_seconds": time.monotonic() - self._wall_start,

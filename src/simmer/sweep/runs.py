@@ -371,6 +371,7 @@ def _run_program(
     run: RunSpec, sim: Simulation, extras: _Extras
 ) -> tuple[str, dict[str, Any], int | None]:
     """Serve the run headless on free ports and let the program drive it."""
+    from simmer.options import RunOptions
     from simmer.serve import serve
 
     if extras.video is not None:
@@ -378,22 +379,17 @@ def _run_program(
     answer = run.answer
     if answer is not None and sim.scenario.target is not None:
         answer = answer.replace("{target}", sim.scenario.target)
-    served = serve(
-        sim,
-        window=False,
+    options = RunOptions.free_ports(
         speed=None,
+        clock="lockstep",
         seconds=run.seconds,
-        port_rx=0,
-        port_tx=0,
-        stream_port=0,
-        echo=lambda _line: None,
         program=run.controller,
-        lockstep=True,
+        answer=answer,
         timeout=run.wall_seconds,
         record=extras.record,
         video=extras.video,
-        answer=answer,
     )
+    served = serve(sim, options, echo=lambda _line: None)
     if served.ended_by == "quit":  # Ctrl-C or a signal stopped this worker: no result
         raise KeyboardInterrupt
     outcome = served.outcome.report().as_dict()
@@ -408,7 +404,8 @@ def _run_policy(
 ) -> tuple[str, dict[str, Any], int | None]:
     """Call ``module:function`` with a client on an in-process lockstep link."""
     from simmer.client import Client
-    from simmer.record import RunRecorder, RunSetup
+    from simmer.options import RunOptions
+    from simmer.record import RunRecorder
     from simmer.world.outcome import Outcome
 
     policy = resolve_policy(run.controller, run.folder)
@@ -416,8 +413,9 @@ def _run_policy(
     link = _LimitedLink(sim, run.seconds)
     recorder = None
     if extras.record is not None:
-        setup = RunSetup("lockstep", None, link.inner.runner.link_delay, run.controller)
-        recorder = RunRecorder(sim, extras.record, setup, outcome)
+        delay = link.inner.runner.link_delay
+        options = RunOptions(speed=None, clock="lockstep", link_delay=delay, program=run.controller)
+        recorder = RunRecorder(sim, extras.record, options, outcome)
     filming = None
     if extras.video is not None:
         _headless_pygame()

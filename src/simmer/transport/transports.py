@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import ipaddress
 import logging
-from pathlib import Path
 
 from simmer.config.models import SimConfig
-from simmer.ports import STREAM_PORT
+from simmer.options import RunOptions
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import GRACE, StreamServer, TwoPortServer
@@ -26,24 +25,16 @@ def is_loopback(host: str) -> bool:
 
 
 class Transports:
-    """The two-port server, the stream server and (optionally) the virtual serial port;
-    ``lockstep``: served on the lockstep clock (no wall-clock grace anywhere)."""
+    """The two-port server, the stream server and (optionally) the virtual serial port, on the
+    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`);
+    on the lockstep clock no wall-clock grace anywhere."""
 
     def __init__(
-        self,
-        bus: CommandBus,
-        config: SimConfig,
-        *,
-        host: str | None = None,
-        port_rx: int | None = None,
-        port_tx: int | None = None,
-        stream_port: int = STREAM_PORT,
-        serial: bool = False,
-        serial_link: str | Path | None = None,
-        lockstep: bool = False,
+        self, bus: CommandBus, config: SimConfig, options: RunOptions | None = None
     ) -> None:
         settings = config.settings
-        self.host = host if host is not None else settings.host
+        options = options if options is not None else RunOptions.for_config(config)
+        self.host = options.host
         if not is_loopback(self.host):
             log.warning(
                 "listening on %s: any machine that can reach it can drive the robot", self.host
@@ -53,25 +44,27 @@ class Transports:
         self.two_port = TwoPortServer(
             bus,
             self.host,
-            settings.port_rx if port_rx is None else port_rx,
-            settings.port_tx if port_tx is None else port_tx,
+            options.port_rx,
+            options.port_tx,
             codec=codec,
             timeout=settings.timeout,
-            grace=0.0 if lockstep else GRACE,
+            grace=0.0 if options.lockstep else GRACE,
         )
         self.serial: SerialServer | None = None
         try:
             self.stream = StreamServer(
                 bus,
                 self.host,
-                stream_port,
+                options.stream_port,
                 width=settings.reply_bytes,
                 encoding=settings.str_encoding,
                 timeout=settings.timeout,
                 idle_timeout=settings.idle_timeout,
             )
-            if serial or serial_link is not None:
-                self.serial = SerialServer(bus, serial_link, codec=codec, timeout=settings.timeout)
+            if options.serial or options.serial_link is not None:
+                self.serial = SerialServer(
+                    bus, options.serial_link, codec=codec, timeout=settings.timeout
+                )
         except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
             raise
