@@ -228,7 +228,7 @@ def test_a_flood_of_shows_keeps_the_bound_per_simulated_second_and_counts_the_re
     assert sim.time == start  # showing costs no simulated time
     assert replies == [0] * SHOWS_PER_SECOND + [-1] * (100 - SHOWS_PER_SECOND)
     assert len(shown) == SHOWS_PER_SECOND
-    assert caplog.text.count(f"over {SHOWS_PER_SECOND} of these messages") == 1
+    assert caplog.text.count(f"over {SHOWS_PER_SECOND} show messages a simulated second") == 1
     robot.sleep(1.0)
     assert robot.show([[1, 2, 3, 1]]) == 0
     assert shown[-1].skipped == 100 - SHOWS_PER_SECOND

@@ -385,8 +385,9 @@ class Client:
         refuses the belief (a grid of over 4,096 cells), with its reason.
         """
         data: list[str] = []
-        rows = [row for row in _rows(particles) if all(map(math.isfinite, row))]
-        cut = len(_rows(particles)) - len(rows) if particles is not None else 0
+        given = _rows(particles)
+        rows = [row for row in given if all(map(math.isfinite, row))]
+        cut = len(given) - len(rows)
         rows, more = _heaviest(rows, MAX_SHOWN)
         cut += more
         if cells is not None:

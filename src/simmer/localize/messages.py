@@ -28,6 +28,8 @@ log = logging.getLogger("simmer.localize")
 class _Budget:
     """How many of one kind of message a simulated second keeps, and how many it dropped."""
 
+    what: str
+    """What is counted, for the log: ``show messages``, ``reported poses``."""
     per_second: int
     start: float = -math.inf
     used: int = 0
@@ -44,9 +46,10 @@ class _Budget:
             return True
         if self.dropped == 0 or self.total_dropped % 1000 == 0:
             log.warning(
-                "over %d of these messages a simulated second: the rest of this second's are "
-                "dropped and counted (%d so far)",
+                "over %d %s a simulated second: the rest of this second's are dropped and "
+                "counted (%d so far)",
                 self.per_second,
+                self.what,
                 self.total_dropped + 1,
             )
         self.dropped += 1
@@ -59,8 +62,8 @@ class Localization:
 
     def __init__(self, sim: Simulation) -> None:
         self.sim = sim
-        self.shows = _Budget(SHOWS_PER_SECOND)
-        self.estimates = _Budget(ESTIMATES_PER_SECOND)
+        self.shows = _Budget("show messages", SHOWS_PER_SECOND)
+        self.estimates = _Budget("reported poses", ESTIMATES_PER_SECOND)
         self.cut = 0
         """Points cut from kept beliefs to fit their bounds, in all."""
 
