@@ -401,3 +401,10 @@ def test_a_sweep_reports_time_to_localize_per_start_cell(tmp_path: Path) -> None
     assert "time to localize median" in summary
     assert "localized_start_cells.png" in summary
     assert (out / "localized_start_cells.png").stat().st_size > 5_000
+
+
+def test_a_belief_the_simulator_refuses_raises_with_its_reason() -> None:
+    with serving() as (_runner, link), connect(port=link.stream.port) as robot:
+        with pytest.raises(ValueError, match="at most 4096 probabilities"):
+            robot.show(cells=[[0.5] * 65] * 65)
+        assert robot.show(cells=[[0.5] * 64] * 64) == 0  # the connection goes on

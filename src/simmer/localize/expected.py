@@ -74,6 +74,27 @@ def _fans(
         out[i] = high if best == math.inf else min(max(best, low), high)
 
 
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _floors(
+    floor_white: BoolArray,
+    tile: float,
+    disk: FloatArray,
+    poses: FloatArray,
+    mount: FloatArray,
+    out: FloatArray,
+) -> None:
+    """Fill ``out[i]`` with an infrared sensor's noise-free reading at ``poses[i]`` (1 white,
+    0 black). ``mount``: x, y, radius, threshold; the arithmetic is the sensor's own."""
+    px, py, radius, threshold = mount[0], mount[1], mount[2], mount[3]
+    for i in numba.prange(poses.shape[0]):
+        rad = math.radians(poses[i, 2])
+        c, s = math.cos(rad), math.sin(rad)
+        x = poses[i, 0] + px * c - py * s
+        y = poses[i, 1] + px * s + py * c
+        fraction = white_fraction(floor_white, tile, x, y, radius, disk)
+        out[i] = 1.0 if fraction >= threshold else 0.0
+
+
 def _as_poses(poses: Any) -> FloatArray:
     array = np.ascontiguousarray(poses, dtype=np.float64)
     if array.ndim == 1 and array.shape[0] == 3:
@@ -137,10 +158,8 @@ def _column(sim: Simulation, device: Any, poses: FloatArray, block: bool) -> Flo
         )
     elif isinstance(device, Infrared):
         maze = sim.maze
-        for i, pose in enumerate(poses):
-            x, y, _ = device.world_pose(pose)
-            fraction = white_fraction(maze.floor_white, maze.tile, x, y, device.radius, _DISK)
-            column[i] = 1.0 if fraction >= device.settings.threshold else 0.0
+        mount = np.array([*device.position, device.radius, device.settings.threshold])
+        _floors(maze.floor_white, maze.tile, _DISK, poses, mount, column)
     elif isinstance(device, Compass):
         offset = device.rotation + device.settings.bias
         column[:] = [wrap_degrees(float(h) + offset) for h in poses[:, 2]]
