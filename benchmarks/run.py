@@ -18,6 +18,7 @@ SUITES = [
     "bench_soak",
     "bench_window",
     "bench_sweep",
+    "bench_localization",
 ]
 
 

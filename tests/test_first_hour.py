@@ -31,6 +31,8 @@ COMMANDS = [
     "keys",
     "run",
     "convert",
+    "export-map",
+    "table",
     "plot",
     "replay",
     "render",

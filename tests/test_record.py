@@ -36,9 +36,11 @@ from simmer.record import (
 from simmer.record.eventlog import TYPE_NAMES, event_from_dict, event_line
 from simmer.record.trace import POSE_COLUMNS
 from simmer.world.events import (
+    BeliefEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
+    EstimateEvent,
     Event,
     KeysEvent,
     PlaceEvent,
@@ -147,6 +149,8 @@ def test_every_event_type_round_trips_with_nan_and_infinities() -> None:
         PlaceEvent(0.6, pose, 36),
         ReachedEvent(0.7, 0.65, 42),
         RunEvent(0.8, "speed", nan, 48, "max"),
+        BeliefEvent(0.9, '{"pose":[1.5,2,90]}', 3, 1, 54, "c"),
+        EstimateEvent(1.0, pose, Pose(1.0, 2.0, 3.0), 60, "c"),
     ]
     assert {type(event) for event in events} == set(TYPE_NAMES)
     for event in events:

@@ -7,6 +7,7 @@ draws it), step the simulation. The last tests run the real two threads.
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import os
@@ -16,16 +17,19 @@ from collections.abc import Callable, Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
+import numpy as np
 import pygame
 import pytest
 
 from simmer import Simulation
 from simmer.client import connect
 from simmer.geometry import Pose
+from simmer.localize.messages import Localization
 from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.ui import Bridge, Window, run_window
+from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
 from simmer.ui.render import RecordingRenderer
@@ -244,6 +248,33 @@ def test_t_shows_and_hides_the_path_driven_so_far(window: Window) -> None:
     tick(window)
     assert not any(trail_shown())
     assert "T" in dict(HELP)
+
+
+def test_b_shows_and_hides_the_programs_belief(window: Window) -> None:
+    sim = window.bridge.sim
+    cloud = [[54.0 + i % 7, 18.0 + i % 5, 10.0 * i, 1.0] for i in range(200)]
+    belief = json.dumps({"particles": cloud, "pose": [54.0, 18.0, 90.0], "ellipse": [4, 2, 0]})
+    Localization(sim).answer(f"%show {belief}", "test")  # as the loop answers a program's show
+    tick(window)
+
+    def shown(color: tuple[int, int, int]) -> int:
+        """Pixels of ``color`` on the screen."""
+        pixels = pygame.surfarray.pixels3d(window.screen)
+        return int(np.all(pixels == color, axis=-1).sum())
+
+    assert shown(BELIEF_COLOR) > 50
+    assert shown(ESTIMATE_COLOR) > 50
+    key(pygame.K_b, unicode="b")
+    tick(window)
+    assert not window.canvas.show_belief
+    assert shown(BELIEF_COLOR) == shown(ESTIMATE_COLOR) == 0
+    key(pygame.K_b, unicode="b")
+    tick(window)
+    assert shown(ESTIMATE_COLOR) > 50
+    window.reset()  # a new run: no belief yet
+    tick(window)
+    assert shown(ESTIMATE_COLOR) == 0
+    assert "B" in dict(HELP)
 
 
 def test_drag_moves_the_robot(window: Window) -> None:

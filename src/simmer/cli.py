@@ -22,6 +22,7 @@ from simmer.ports import STREAM_PORT
 if TYPE_CHECKING:
     from simmer.config import SimConfig
     from simmer.ui.replay_model import Recording
+    from simmer.world import Simulation
 
 
 class _Command(TyperCommand):
@@ -723,6 +724,88 @@ def convert(
         out.print(text, markup=False, end="")
     else:
         out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+
+
+@app.command(
+    "export-map",
+    cls=_Command,
+    short_help="Write the maze as JSON, as robot.maze() gives it.",
+    epilog=_example("simmer export-map my_rover.toml -o maze.json"),
+)
+def export_map(
+    config: ConfigArg = None,
+    output: Annotated[
+        Path, typer.Option("--output", "-o", help="JSON file to write.", metavar="FILE")
+    ] = Path("maze.json"),
+) -> None:
+    """Write the maze as a program may know it (walls, sizes, wall segments, floor, zones, the
+    configured start, every device's mount) as JSON: what robot.maze() answers, for a program
+    that also runs on the real robot. docs/localization.md says what each key means."""
+    from simmer.localize.files import write_map
+
+    sim = _simulation(config)
+    try:
+        write_map(sim, output)
+    except OSError as exc:
+        err.print(f"cannot write {output}: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"wrote {output}", markup=False)
+
+
+@app.command(
+    cls=_Command,
+    short_help="Write a lookup table of noise-free readings at every pose.",
+    epilog=_example("simmer table my_rover.toml --step 1 --headings 0:360:1 -o table.npz"),
+)
+def table(
+    config: ConfigArg = None,
+    output: Annotated[
+        Path,
+        typer.Option("--output", "-o", help="Table to write: .npz or .csv.", metavar="FILE"),
+    ] = Path("table.npz"),
+    step: Annotated[
+        float, typer.Option(help="Inches between positions (x and y).", metavar="INCHES")
+    ] = 1.0,
+    headings: Annotated[
+        str, typer.Option(help="Headings START:STOP:STEP in degrees.", metavar="RANGE")
+    ] = "0:360:1",
+    sensor: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="A sensor to include (repeat it; default: every one it can).", metavar="ID"
+        ),
+    ] = None,
+) -> None:
+    """Write the readings each sensor gives with its noise off at every position (every STEP
+    inches, half a step from the walls' lines) and heading, from the walls alone (no block):
+    ultrasonic, infrared and compass sensors, with the simulator's own geometry."""
+    from rich.progress import Progress
+
+    from simmer.localize.expected import parse_headings
+    from simmer.localize.files import write_table
+
+    sim = _simulation(config)
+    try:
+        angles = parse_headings(headings)
+        with Progress(console=err, transient=True) as progress:
+            task = progress.add_task("casting rays", total=None)
+            done = lambda row, rows: progress.update(task, completed=row, total=rows)  # noqa: E731
+            count, ids = write_table(sim, output, step, angles, sensor, done)
+    except (ValueError, OSError) as exc:
+        err.print(f"cannot write the table: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"wrote {output}: {count:,} readings of {', '.join(ids)}", markup=False)
+
+
+def _simulation(config: Path | None) -> Simulation:
+    """The simulation of a configuration, or its problems and exit status 1."""
+    from simmer.world import Simulation
+
+    try:
+        return Simulation.from_config(config)
+    except ConfigError as exc:
+        _report_config_error(exc)
+        raise typer.Exit(1) from None
 
 
 @app.command(

@@ -16,19 +16,27 @@ persistent protocol, :meth:`Client.explain` asks why the last message's NaN repl
 
 from __future__ import annotations
 
+import json
+import logging
 import math
 import os
 import socket
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Literal, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
 
 from simmer.errors import ConnectionFailed, ReplyTimeout
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 from simmer.protocol import (
+    DOCUMENT,
+    DOCUMENT_HEADER,
     EXPLAIN,
     FRAME_HEADER,
+    MAX_DOCUMENT_BYTES,
+    MAX_MESSAGE_BYTES,
+    META_PREFIX,
     TEXT_WIDTH,
     framed_value,
     read_frame_header,
@@ -37,6 +45,7 @@ from simmer.protocol import (
 )
 
 Scheme = Literal["stream", "two-port", "serial"]
+log = logging.getLogger("simmer.client")
 
 
 FRAME = ("[", "]")
@@ -55,6 +64,15 @@ class Link(Protocol):
 
     def close(self) -> None:
         """Release the connection."""
+        ...
+
+
+@runtime_checkable
+class AskLink(Protocol):
+    """A link that can send localization messages (the persistent protocol, in-process)."""
+
+    def ask(self, message: str) -> tuple[list[float], str | None]:
+        """Send ``%maze``, ``%show JSON`` or ``%pose X Y H``: the values, or the text answer."""
         ...
 
 
@@ -124,6 +142,24 @@ class StreamLink:
         if math.isnan(value):
             raise ReplyTimeout(f"the simulator refused the clock message {message!r}")
         return value
+
+    def ask(self, message: str) -> tuple[list[float], str | None]:
+        """Send a localization message; its values, or the JSON of a document frame."""
+        try:
+            self._sock.sendall(message.encode() + b"\n")
+            header = _recv_exactly(self._sock, FRAME_HEADER.size)
+            if header[:1] == DOCUMENT:
+                rest = _recv_exactly(self._sock, DOCUMENT_HEADER.size - FRAME_HEADER.size)
+                _, size = DOCUMENT_HEADER.unpack(header + rest)
+                if size > MAX_DOCUMENT_BYTES:
+                    raise ConnectionFailed(f"{self.address} sent a document of {size} bytes")
+                return [], _recv_exactly(self._sock, size).decode("utf-8")
+            width, count = read_frame_header(header)
+            return unpack_replies(_recv_exactly(self._sock, width * count), width), None
+        except TimeoutError:
+            raise ReplyTimeout(f"no reply to {message[:40]!r} from {self.address}") from None
+        except OSError as exc:
+            raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
 
     def explain(self) -> str:
         """Why the last message's NaN replies are NaN, one reason a line ("" if none)."""
@@ -256,6 +292,9 @@ class Client:
     def __init__(self, link: Link, *, lockstep: bool = False) -> None:
         self.link = link
         self._clock = link if lockstep and isinstance(link, ClockLink) else None
+        self.cut = 0
+        """Points :meth:`show` cut to fit the bounds, in all."""
+        self._cut_logged = -math.inf
 
     @property
     def lockstep(self) -> bool:
@@ -305,6 +344,102 @@ class Client:
                 raise ReplyTimeout(f"drives still moving after {timeout} s")
             self.sleep(poll)
 
+    # -- localization (the persistent protocol only) ----------------------------------
+
+    def _ask(self, message: str) -> tuple[list[float], str | None]:
+        if not isinstance(self.link, AskLink):
+            raise ConnectionFailed(
+                "the maze and beliefs go over the persistent protocol only: connect() without "
+                "scheme or serial (simmer export-map writes the maze for the real robot)"
+            )
+        return self.link.ask(message)
+
+    def maze(self) -> dict[str, Any]:
+        """The maze as the simulator knows it: walls, sizes, wall segments, floor, zones,
+        the configured start and every device's mount (docs/localization.md)."""
+        _, text = self._ask(META_PREFIX.decode() + "maze")
+        if text is None:
+            raise ConnectionFailed("the simulator answered '%maze' with values, not the maze")
+        data: dict[str, Any] = json.loads(text)
+        return data
+
+    def show(
+        self,
+        particles: Any = None,
+        *,
+        cells: Any = None,
+        pose: Sequence[float] | None = None,
+        ellipse: Sequence[float] | None = None,
+        cov: Sequence[Sequence[float]] | None = None,
+        path: Any = None,
+        labels: Sequence[tuple[float, float, str]] = (),
+    ) -> int:
+        """Show your belief over the maze (the window, videos, the recording); free of
+        simulated time. ``particles``: rows of x, y, heading, weight (a NumPy array does);
+        ``cells``: a grid of probabilities, row 0 at y = 0; ``pose``: x, y, heading, with its
+        uncertainty as ``ellipse`` (semi-axes a, b in inches, angle of a from +x) or ``cov``
+        (the 2 x 2 covariance of x and y: a 2-sigma ellipse); ``path``: rows of x, y;
+        ``labels``: (x, y, text). Returns how many points were cut to fit the bounds
+        (docs/localization.md; -1: the message was dropped, over the shows a simulated
+        second); a cut is logged, at most once a wall second. ValueError if the simulator
+        refuses the belief (a grid of over 4,096 cells), with its reason.
+        """
+        data: list[str] = []
+        given = _rows(particles)
+        rows = [row for row in given if all(map(math.isfinite, row))]
+        cut = len(given) - len(rows)
+        rows, more = _heaviest(rows, MAX_SHOWN)
+        cut += more
+        if cells is not None:
+            data.append('"cells":' + json.dumps(_rows(cells)))
+        if pose is not None:
+            data.append('"pose":' + json.dumps([float(v) for v in pose]))
+        if cov is not None:
+            ellipse = _ellipse(cov)
+        if ellipse is not None:
+            data.append('"ellipse":' + json.dumps([float(v) for v in ellipse]))
+        if path is not None:
+            data.append('"path":' + _points(_rows(path)))
+        if labels:
+            data.append(
+                '"labels":' + json.dumps([[float(x), float(y), str(t)] for x, y, t in labels])
+            )
+        head = "%show {" + ",".join(data)
+        budget = MAX_MESSAGE_BYTES - len(head) - 20
+        text = _particles(rows)
+        while len(text) > budget:  # too many digits for one line: the lightest go first
+            rows, more = _heaviest(rows, max(1, len(rows) * budget // len(text) - 1))
+            cut += more
+            text = _particles(rows)
+        if rows:
+            head += ("," if data else "") + '"particles":' + text
+        if cut:
+            self._log_cut(cut)
+        (value,) = self._ask(head + "}")[0] or [math.nan]
+        if math.isnan(value):
+            raise ValueError(f"the simulator refused the belief: {self.explain() or 'see its log'}")
+        return cut + int(value) if value >= 0 else -1
+
+    def report_pose(self, x: float, y: float, heading: float) -> bool:
+        """Tell the simulator where you believe the robot is, for the run's outcome (its error
+        over time, when it localized); free of simulated time. False if over the bound (a
+        simulated second keeps 60)."""
+        (value,) = self._ask(f"%pose {float(x)!r} {float(y)!r} {float(heading)!r}")[0]
+        return value == 0.0
+
+    def _log_cut(self, cut: int) -> None:
+        self.cut += cut
+        now = time.monotonic()
+        if now - self._cut_logged >= 1.0:
+            self._cut_logged = now
+            log.warning(
+                "show: %d points cut to fit the bounds (%d in all; at most %d particles a "
+                "message, the heaviest kept)",
+                cut,
+                self.cut,
+                MAX_SHOWN,
+            )
+
     def close(self) -> None:
         """Close the connection."""
         self.link.close()
@@ -316,6 +451,46 @@ class Client:
         self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+MAX_SHOWN = 2000
+"""Particles in one show message (the simulator's bound, simmer.localize.belief)."""
+
+
+def _rows(value: Any) -> list[list[float]]:
+    """Rows of numbers from a list of sequences or a NumPy array (without importing NumPy)."""
+    if value is None:
+        return []
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    return [[float(v) for v in row] for row in value]
+
+
+def _heaviest(rows: list[list[float]], keep: int) -> tuple[list[list[float]], int]:
+    """The ``keep`` heaviest particles (last column), in their order; and how many went."""
+    if len(rows) <= keep:
+        return rows, 0
+    chosen = sorted(sorted(range(len(rows)), key=lambda i: -rows[i][3])[:keep])
+    return [rows[i] for i in chosen], len(rows) - keep
+
+
+def _points(rows: list[list[float]]) -> str:
+    """Rows of x, y as JSON, to 0.01 in."""
+    return "[" + ",".join(f"[{x:.2f},{y:.2f}]" for x, y in rows) + "]"
+
+
+def _particles(rows: list[list[float]]) -> str:
+    """Particles as JSON, x and y to 0.01 in, heading to 0.1 degree, weight to 4 digits."""
+    return "[" + ",".join(f"[{x:.2f},{y:.2f},{h:.1f},{w:.4g}]" for x, y, h, w in rows) + "]"
+
+
+def _ellipse(cov: Sequence[Sequence[float]]) -> tuple[float, float, float]:
+    """The 2-sigma ellipse (a, b, angle of a from +x) of a 2 x 2 covariance."""
+    sxx, sxy, syy = float(cov[0][0]), float(cov[0][1]), float(cov[1][1])
+    mean, diff = (sxx + syy) / 2.0, math.hypot((sxx - syy) / 2.0, sxy)
+    big, small = max(mean + diff, 0.0), max(mean - diff, 0.0)
+    angle = math.degrees(0.5 * math.atan2(2.0 * sxy, sxx - syy))
+    return 2.0 * math.sqrt(big), 2.0 * math.sqrt(small), angle
 
 
 def _from_env(name: str, default: int) -> int:

@@ -195,6 +195,8 @@ class Decoded:
     size: int = 0
     """Bytes of the transport's stream this message used (its line ending too): what the
     lockstep clock counts as taken once the message is answered (see :func:`parse_clock`)."""
+    meta: bool = False
+    """A localization message (persistent protocol, ``%...``; see :func:`decode_meta`)."""
 
 
 def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
@@ -504,3 +506,38 @@ def parse_clock(text: str) -> ClockMessage:
         f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time' or "
         "'!sync', each optionally followed by ' @BYTES'"
     )
+
+
+# --------------------------------------------------------------------------- localization messages
+
+META_PREFIX = b"%"
+"""A persistent-protocol line starting with this is a localization message (``%maze``,
+``%show JSON``, ``%pose X Y HEADING``: :mod:`simmer.localize.messages`), not robot commands.
+It costs no simulated time and is answered in order like any other line."""
+
+DOCUMENT = b"J"
+"""Persistent protocol: the first byte of a document frame (the answer to ``%maze``): then the
+length as an unsigned 32-bit little-endian number, then that many bytes of UTF-8 JSON."""
+DOCUMENT_HEADER = struct.Struct("<cI")
+MAX_DOCUMENT_BYTES = 16 * 1024 * 1024
+"""Longest document frame (a maze's JSON is a few kilobytes)."""
+
+
+def decode_meta(data: bytes, size: int) -> Decoded:
+    """A localization line (``%...``, line ending removed; ``size``: the bytes it used): one
+    reply, whatever commas its JSON has; only the byte limit applies."""
+    if (refused := over_limit(len(data), 1)) is not None:
+        return refused
+    try:
+        text = data.decode("utf-8").rstrip("\r")
+    except UnicodeDecodeError as exc:
+        return Decoded(None, 1, _not_text(exc, "utf-8"), meta=True, size=size)
+    return Decoded(text, 1, meta=True, size=size)
+
+
+def frame_document(text: str) -> bytes:
+    """A document frame (:data:`DOCUMENT`); ValueError if over :data:`MAX_DOCUMENT_BYTES`."""
+    data = text.encode("utf-8")
+    if len(data) > MAX_DOCUMENT_BYTES:
+        raise ValueError(f"a document of {len(data)} bytes is over {MAX_DOCUMENT_BYTES}")
+    return DOCUMENT_HEADER.pack(DOCUMENT, len(data)) + data

@@ -26,6 +26,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from simmer.localize.messages import Localization
 from simmer.lockstep import FREE_TIME_READS
 from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, printable
 from simmer.transport.bus import CommandBus, Request
@@ -161,6 +162,8 @@ class Runner:
         self._log = _LogBudget()
         self._forgiven = 0
         """Bytes a clock message gave up waiting for (:data:`SYNC_WAIT`), counted as taken."""
+        self.localization = Localization(sim)
+        """Answers ``%maze``, ``%show`` and ``%pose``, and keeps their bounds."""
 
     @property
     def speed(self) -> float | None:
@@ -207,6 +210,8 @@ class Runner:
         if decoded.clock and decoded.text is not None:
             self._clock_message(request, decoded.text)
             return []
+        if decoded.meta and decoded.text is not None:
+            return self._localization(request, decoded.text)
         if self.lockstep:
             self.clock = max(self.clock, self.sim.time) + self.link_delay
             self._reads = 0
@@ -221,6 +226,23 @@ class Runner:
             records: list[tuple[int, str]] = []
             replies = self.sim.command(decoded.text, records, request.client)
             self._report(printable(request.client), records, request.reasons)
+        request.future.set_result(replies)
+        return replies
+
+    def _localization(self, request: Request, text: str) -> list[float]:
+        """A localization message (``%maze``, ``%show``, ``%pose``): answered now, at no
+        simulated time (no link delay) and touching nothing the simulation answers
+        (:mod:`simmer.localize.messages`); a bad one answers NaN, with its reason."""
+        self.bus.took(request.decoded.size)
+        try:
+            replies, answer = self.localization.answer(text, request.client)
+        except ValueError as exc:
+            client = printable(request.client)
+            self._log.log(client, logging.WARNING, "bad message from %s: %s", client, exc)
+            request.reasons.append(str(exc))
+            replies, answer = [math.nan], None
+        if answer is not None:
+            request.answer.append(answer)
         request.future.set_result(replies)
         return replies
 
@@ -482,6 +504,13 @@ class LocalLink:
         self.runner.handle(request)
         self.runner.catch_up()
         return request.future.result()
+
+    def ask(self, message: str) -> tuple[list[float], str | None]:
+        """A localization message (``%maze``, ``%show``, ``%pose``): its values, or its text;
+        it costs no simulated time."""
+        request = Request(Decoded(message, 1, meta=True), "local")
+        self.runner.handle(request)
+        return request.future.result(), (request.answer[0] if request.answer else None)
 
     def clock(self, message: str) -> float:
         """Send a clock message; the simulated time after it."""

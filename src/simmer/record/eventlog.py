@@ -32,9 +32,11 @@ from typing import Any, get_type_hints
 from simmer.geometry import Pose
 from simmer.options import MAX_RECORDING_BYTES
 from simmer.world.events import (
+    BeliefEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
+    EstimateEvent,
     Event,
     KeysEvent,
     PlaceEvent,
@@ -54,6 +56,8 @@ TYPE_NAMES: dict[type[Event], str] = {
     PlaceEvent: "place",
     ReachedEvent: "reached",
     RunEvent: "run",
+    BeliefEvent: "belief",
+    EstimateEvent: "estimate",
 }
 """The ``type`` written for each event class."""
 EVENT_TYPES = {name: cls for cls, name in TYPE_NAMES.items()}

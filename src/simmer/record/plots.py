@@ -42,7 +42,14 @@ from pydantic import ValidationError
 
 from simmer.config.models import Settings
 from simmer.errors import SimmerError
-from simmer.geometry import FloatArray, heading_vector, place_polygon
+from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.localize.metrics import (
+    HEADING_TOLERANCE,
+    MAX_ERRORS,
+    POSITION_TOLERANCE,
+    errors,
+    localized_at,
+)
 from simmer.world.maze import Block, Maze, robot_outline
 
 if TYPE_CHECKING:
@@ -63,6 +70,7 @@ TRACE_NOT_SENSORS = frozenset({*TRACE_REQUIRED, "step", "collisions"})
 
 EV_TYPE, EV_TIME, EV_MESSAGE, EV_REPLIES, EV_POSE = "type", "time", "message", "replies", "pose"
 EV_COMMAND, EV_COLLISION, EV_RESET, EV_REACHED = "command", "collision", "reset", "reached"
+EV_ESTIMATE, EV_TRUTH = "estimate", "truth"
 MANIFEST_CONFIG, MANIFEST_SETTINGS, MANIFEST_SEED = "config", "settings", "seed"
 MANIFEST_SOURCE, MANIFEST_DEVICES, DEVICE_ID, DEVICE_KIND = "source", "devices", "id", "kind"
 SENSOR_UNITS = {
@@ -72,6 +80,8 @@ SENSOR_UNITS = {
     "gyroscope": "angle turned (°)",
 }
 """What the built-in sensor kinds read, for the y axis of their panel."""
+LOCALIZATION_IMAGE = "localization.png"
+LOCALIZATION_WORDS = (LOCALIZATION_IMAGE, "The program's estimate against the truth")
 IMAGES = ((PATH_IMAGE, "The robot's true path"), (SENSORS_IMAGE, "Sensor readings against time"))
 """The images :func:`plot_run` draws, with the words report.md shows for each."""
 
@@ -194,6 +204,19 @@ class RecordedRun:
     reached: list[Mark] = field(default_factory=list)
     scenario: RecordedScenario | None = None
     """A project run's start, block and target (the manifest's ``scenario``), if readable."""
+    estimates: list[Estimate] = field(default_factory=list)
+    """The program's reported poses (``robot.report_pose`` or shown), at most
+    :data:`~simmer.localize.metrics.MAX_ERRORS`."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A reported pose's error: inches and degrees off the truth, when."""
+
+    time: float
+    part: int
+    position: float
+    heading: float
 
 
 @dataclass(frozen=True)
@@ -393,6 +416,10 @@ def _read_events(path: Path, run: RecordedRun) -> None:
             run.collisions.append(Mark(time, part, _position(event.get(EV_POSE))))
         elif kind == EV_REACHED:
             run.reached.append(Mark(time, part))
+        elif kind == EV_ESTIMATE and len(run.estimates) < MAX_ERRORS:
+            pose, truth = _pose(event.get(EV_POSE)), _pose(event.get(EV_TRUTH))
+            if pose is not None and truth is not None:
+                run.estimates.append(Estimate(time, part, *errors(pose, truth)))
 
 
 def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
@@ -422,6 +449,15 @@ def _float(value: Any) -> float:
     return math.nan
 
 
+def _pose(value: Any) -> Pose | None:
+    """A finite ``[x, y, heading]`` pose, or None."""
+    if isinstance(value, list) and len(value) == 3:
+        pose = Pose(*(_float(v) for v in value))
+        if all(map(math.isfinite, pose)):
+            return pose
+    return None
+
+
 def _position(value: Any) -> tuple[float, float] | None:
     """(x, y) of a ``[x, y, heading]`` pose, or None."""
     if isinstance(value, list) and len(value) >= 2:
@@ -444,14 +480,18 @@ def plot_run(folder: str | Path) -> list[Path]:
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
     write_path_plot(run, path)
     write_sensor_plot(run, sensors)
+    images = [path, sensors]
+    if run.estimates:
+        images.append(run.folder / LOCALIZATION_IMAGE)
+        write_localization_plot(run, images[-1])
     if (run.folder / REPORT_JSON).is_file():
         try:
-            return [path, sensors, write_report_md(run.folder)]
+            return [*images, write_report_md(run.folder)]
         except (OSError, ValueError) as exc:
-            raise PlotError(
-                f"drew {path.name} and {sensors.name}, but not report.md: {exc}"
-            ) from None
-    return [path, sensors, report] if link_from_report(report, IMAGES) else [path, sensors]
+            drawn = " and ".join(image.name for image in images)
+            raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
+    shown = [*IMAGES, LOCALIZATION_WORDS] if run.estimates else IMAGES
+    return [*images, report] if link_from_report(report, shown) else images
 
 
 def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
@@ -479,6 +519,51 @@ def write_path_plot(run: RecordedRun, target: Path) -> PixelMap:
         origin, unit = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
         height = fig.bbox.height
     return PixelMap(origin[0], unit[0] - origin[0], height - origin[1], origin[1] - unit[1])
+
+
+def write_localization_plot(run: RecordedRun, target: Path) -> None:
+    """Draw the program's estimate's error against time into ``target``: inches and degrees
+    off the truth, the tolerances and when it localized (within both from then on)."""
+    from matplotlib import style
+    from matplotlib.figure import Figure
+
+    offsets = run.trace.offsets()
+    times = [e.time + offsets[min(e.part, len(offsets) - 1)] for e in run.estimates]
+    since = localized_at(
+        [(t, e.position, e.heading) for e, t in zip(run.estimates, times, strict=True)]
+    )
+    with style.context("default"):
+        fig = Figure(figsize=(12.0, 5.5), dpi=DPI, layout="constrained")
+        top, bottom = fig.subplots(2, 1, sharex=True)
+        panels = (
+            (top, [e.position for e in run.estimates], POSITION_TOLERANCE, "position error (in)"),
+            (bottom, [e.heading for e in run.estimates], HEADING_TOLERANCE, "heading error (°)"),
+        )
+        for ax, values, tolerance, label in panels:
+            unit = label[label.index("(") + 1 : -1]
+            ax.plot(times, values, marker=".", lw=1.2, color=COMMAND_COLOR)
+            ax.axhline(
+                tolerance,
+                color=START_COLOR,
+                ls="--",
+                lw=1.0,
+                label=f"tolerance {tolerance:g} {unit}",
+            )
+            if since is not None:
+                ax.axvline(since, color=PATH_COLOR, lw=1.5, label="localized")
+            ax.set_ylabel(label)
+            ax.set_ylim(bottom=0)
+            ax.grid(alpha=0.3)
+            ax.legend(loc="upper right", fontsize=9)
+        bottom.set_xlabel("time (s)")
+        when = f"localized at {since:.2f} s" if since is not None else "never localized"
+        fig.suptitle(
+            f"The program's estimate against the truth in {run.folder.resolve().name}: {when}\n"
+            f"{len(run.estimates)} estimates; localized: within {POSITION_TOLERANCE:g} in and "
+            f"{HEADING_TOLERANCE:g}° from then on",
+            fontsize=12,
+        )
+        _save(fig, target)
 
 
 def write_sensor_plot(run: RecordedRun, target: Path) -> None:

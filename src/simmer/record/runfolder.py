@@ -60,7 +60,11 @@ EVENTS = "events.jsonl"
 TRACE = "trace.csv"
 REPORT_JSON = "report.json"
 REPORT_MD = "report.md"
-PLOTS = (("path.png", "The robot's true path"), ("sensors.png", "Sensor readings against time"))
+PLOTS = (
+    ("path.png", "The robot's true path"),
+    ("sensors.png", "Sensor readings against time"),
+    ("localization.png", "The program's estimate against the truth"),
+)
 """The pictures ``simmer plot DIR`` draws, which report.md shows when they exist."""
 MAX_JSON_BYTES = 16_000_000
 """Largest ``manifest.json`` or ``report.json`` read: a manifest holds the largest maze allowed
@@ -386,6 +390,16 @@ def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
     return lines
 
 
+def _localization_rows(outcome: dict[str, Any]) -> list[str]:
+    """The table's row for the program's reported poses, if it reported any."""
+    count = outcome.get("estimates")
+    if not isinstance(count, int) or isinstance(count, bool) or count <= 0:
+        return []
+    when = outcome.get("localized_at")
+    said = f"at {_seconds(when)}" if isinstance(when, int | float) else "no"
+    return [f"| Localized (within 3 in and 15 deg to the end; {count} estimates) | {said} |"]
+
+
 def write_report_md(folder: str | Path) -> Path:
     """Write ``report.md`` from the folder's report.json and manifest: the outcome in plain
     words, and ``path.png`` and ``sensors.png`` if they are there (``simmer plot`` calls this
@@ -436,6 +450,7 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
         f"| Busy replies (a drive still moving), NaN replies | "
         f"{outcome.get('busy_replies', 0)}, {outcome['nan_replies']} |",
         f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
+        *_localization_rows(outcome),
         f"| Length of the run | {report['duration']:.2f} s ({report['steps']} steps), "
         f"{report['wall_seconds']:.1f} s of wall-clock time |",
         f"| How it ended | {ended} |",

@@ -59,12 +59,20 @@ def draw_pictures(
             drawn.append(("sampled.png", caption))
         starts = [r for r in rows if r.get("start_x")]
         if spec.project and starts:
-            _save(_start_cells_figure(spec, starts), folder / "start_cells.png")
+            _save(_start_cells_figure(spec, starts, START_PANELS), folder / "start_cells.png")
             caption = (
                 "Success rate by start cell (all headings together), and the rate of each "
                 "milestone: from where does the program fail?"
             )
             drawn.append(("start_cells.png", caption))
+        if starts and any(r.get("estimates") for r in starts):
+            figure = _start_cells_figure(spec, starts, LOCALIZED_PANELS)
+            _save(figure, folder / "localized_start_cells.png")
+            caption = (
+                "Rate of runs that localized (within 3 in and 15 deg to the end) by start cell, "
+                "with the median time to localize: from where is the robot hard to place?"
+            )
+            drawn.append(("localized_start_cells.png", caption))
     return drawn
 
 
@@ -76,11 +84,32 @@ START_PANELS = (
     ("delivered", "delivered to the target"),
 )
 """The start-cell pictures: success, then each project milestone."""
+LOCALIZED = "localized_at"
+LOCALIZED_PANELS = ((LOCALIZED, "localized: time to localize (median) by start cell"),)
+"""The localization start-cell picture: runs whose program localized, and how fast."""
 
 
-def _start_cells_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure:
-    """The maze once per panel of :data:`START_PANELS`, each start cell coloured by the rate
-    of runs starting there that met it (red 0 to green 1), with ``k/n`` written in it."""
+def _met(run: Mapping[str, str], column: str) -> bool:
+    """Whether a run met a panel's column: True, or for :data:`LOCALIZED` any time at all."""
+    if column == LOCALIZED:
+        return bool(run.get(column))
+    return run.get(column) == "True"
+
+
+def _cell_text(runs: Sequence[Mapping[str, str]], column: str, met: int) -> str:
+    """``k/n``, and for :data:`LOCALIZED` the median time to localize of those that did."""
+    text = f"{met}/{len(runs)}"
+    if column == LOCALIZED and met:
+        times = sorted(float(r[column]) for r in runs if r.get(column))
+        text += f"\n{float(np.median(times)):.1f} s"
+    return text
+
+
+def _start_cells_figure(
+    spec: SweepSpec, rows: Sequence[Mapping[str, str]], panels: Sequence[tuple[str, str]]
+) -> Figure:
+    """The maze once per panel of ``panels`` (column, title), each start cell coloured by the
+    rate of runs starting there that met it (red 0 to green 1), with ``k/n`` written in it."""
     from matplotlib import colormaps
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
@@ -99,9 +128,9 @@ def _start_cells_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> F
         by_cell.setdefault(place, []).append(r)
     cmap = colormaps["RdYlGn"]
     panel_height = 4.2 * maze.height / maze.width + 0.5
-    fig = Figure(figsize=(8.0, panel_height * len(START_PANELS)), layout="constrained")
-    for i, (column, title) in enumerate(START_PANELS):
-        ax = fig.add_subplot(len(START_PANELS), 1, i + 1)
+    fig = Figure(figsize=(8.0, panel_height * len(panels)), layout="constrained")
+    for i, (column, title) in enumerate(panels):
+        ax = fig.add_subplot(len(panels), 1, i + 1)
         for row, col in zip(*np.nonzero(maze.solid), strict=True):
             ax.add_patch(Rectangle((col * cell, row * cell), cell, cell, fc="#555555"))
         for zone in zones.all():
@@ -113,14 +142,14 @@ def _start_cells_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> F
             ax.text(col * cell + 0.8, row * cell + 0.8, zone.name, va="top", fontsize=7)
         met_total = 0
         for (row, col), runs in by_cell.items():
-            met = sum(r.get(column) == "True" for r in runs)
+            met = sum(_met(r, column) for r in runs)
             met_total += met
             rate = met / len(runs)
             ax.add_patch(Rectangle((col * cell, row * cell), cell, cell, fc=cmap(rate), ec="white"))
             ax.text(
                 (col + 0.5) * cell,
                 (row + 0.5) * cell,
-                f"{met}/{len(runs)}",
+                _cell_text(runs, column, met),
                 ha="center",
                 va="center",
                 fontsize=8,

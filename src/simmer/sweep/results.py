@@ -10,6 +10,7 @@ import csv
 import math
 import os
 import shutil
+import statistics
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -276,6 +277,7 @@ def write_summary(
         f"Overall success {total}/{len(rows)} = {_rate(total, len(rows))} "
         f"(95% Wilson interval {low:.3f} to {high:.3f}).",
         "",
+        *_localized(rows),
         "| "
         + " | ".join(
             [
@@ -315,6 +317,27 @@ def write_summary(
     path = folder / "summary.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _localized(rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """A line on time to localize, if any run's program reported its pose."""
+    reported = [r for r in rows if r.get("estimates")]
+    if not reported:
+        return []
+    times = sorted(float(r["localized_at"]) for r in reported if r.get("localized_at"))
+    low, high = wilson_interval(len(times), len(reported))
+    said = (
+        f"; time to localize median {statistics.median(times):.2f} s "
+        f"(from {times[0]:.2f} to {times[-1]:.2f} s)"
+        if times
+        else ""
+    )
+    return [
+        f"Localized (the reported pose within 3 in and 15 deg to the end) in "
+        f"{len(times)}/{len(reported)} runs that reported one (95% Wilson interval {low:.3f} "
+        f"to {high:.3f}){said}.",
+        "",
+    ]
 
 
 def _gallery(folder: Path, spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> list[str]:

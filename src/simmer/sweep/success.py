@@ -15,6 +15,15 @@ from functools import lru_cache
 from typing import Any
 
 DEFAULT_SUCCESS = "reached and collisions == 0"
+LOCALIZATION_FIELDS = (
+    "estimates",
+    "first_within_at",
+    "localized_at",
+    "final_position_error",
+    "final_heading_error",
+)
+"""How well the program's reported poses matched the truth (:mod:`simmer.localize.metrics`);
+no value in a run whose program reported none."""
 OUTCOME_FIELDS = (
     "time",
     "first_motion",
@@ -31,6 +40,7 @@ OUTCOME_FIELDS = (
     "final_x",
     "final_y",
     "final_heading",
+    *LOCALIZATION_FIELDS,
 )
 """The outcome's fields as results.csv has them (the final pose in three columns); the names
 a success condition may use."""

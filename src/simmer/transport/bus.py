@@ -136,6 +136,9 @@ class Request:
     reasons: list[str] = field(default_factory=list)
     """Why some replies are NaN, filled in by the loop before the future completes (the
     persistent protocol's ``?`` sends them)."""
+    answer: list[str] = field(default_factory=list)
+    """A text answer instead of the values (a localization message's, ``%maze``), filled in
+    by the loop before the future completes; sent as a document frame."""
 
 
 class Timer:

@@ -42,11 +42,14 @@ from simmer.protocol import (
     EXPLAIN,
     MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
+    META_PREFIX,
     Decoded,
     PackedCodec,
     Replies,
     ReplyCodec,
     decode_message,
+    decode_meta,
+    frame_document,
     frame_replies,
     frame_text,
     printable,
@@ -694,6 +697,8 @@ class _StreamConnection(_Connection):
             if line.rstrip(b"\r") == EXPLAIN:
                 self.server.bus.took(end + 1)
                 self.explain_later()
+            elif line.startswith(META_PREFIX):
+                self.submit(decode_meta(line, end + 1))
             else:
                 clock = line.startswith(CLOCK_PREFIX)
                 self.submit(decode_message(line, self.stream.encoding, size=end + 1, clock=clock))
@@ -746,6 +751,9 @@ class _StreamConnection(_Connection):
             values, self.ended, self.last = [math.nan], True, future
         self.reasons = request.reasons
         self.close_when_sent = future is self.last
+        if request.answer:  # a localization message's text (``%maze``)
+            self.send(frame_document(request.answer[0]))
+            return
         width = 8 if request.decoded.clock else self.stream.width  # a time needs float64
         self.send(frame_replies(values, width))
 

@@ -45,6 +45,7 @@ HELP = (
     ("+ / -", "faster / slower (simulation speed)"),
     ("R", "reset robot, block, sensors and the outcome"),
     ("T", "show / hide the path driven so far (videos show it)"),
+    ("B", "show / hide the program's belief (robot.show; videos show it)"),
     ("left-drag", "move the robot (refused onto a wall)"),
     ("right-drag", "turn the robot"),
     ("V", "start / stop a video (simmer-*.mp4, named above)"),

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from simmer.geometry import FloatArray
+from simmer.localize.belief import BeliefBoard
 from simmer.ui.hud import CommandLog
 from simmer.ui.snapshot import RobotLayout, Snapshot
 from simmer.ui.trail import Trail
@@ -54,10 +55,10 @@ class LocalControls:
 
 class SnapshotMaker:
     """Builds :class:`Snapshot` values of one simulation, with what the HUD shows besides it:
-    the run's outcome, the last commands and the trail (observers it adds to ``sim`` unless
-    ``sim`` has them already). The
-    window's :class:`~simmer.ui.bridge.Bridge` and the video
-    (:class:`~simmer.ui.video.VideoRecorder`) each have one.
+    the run's outcome, the last commands, the trail and the program's belief (observers it
+    adds to ``sim`` unless ``sim`` has them already). The window's
+    :class:`~simmer.ui.bridge.Bridge` and the video (:class:`~simmer.ui.video.VideoRecorder`)
+    each have one.
 
     Use it only in the thread that owns ``sim``.
     """
@@ -80,6 +81,12 @@ class SnapshotMaker:
         self.trail = trail
         """The path driven so far: shared like :attr:`outcome` (a video started from the window
         shows the window's trail)."""
+        board = next((o for o in sim.observers if isinstance(o, BeliefBoard)), None)
+        if board is None:
+            board = BeliefBoard()
+            self._attached.append(board)
+        self.beliefs = board
+        """The belief the program showed last: shared too."""
         commands = next((o for o in sim.observers if isinstance(o, CommandLog)), None)
         if commands is None:
             commands = CommandLog()
@@ -115,6 +122,7 @@ class SnapshotMaker:
             recording=recording,
             notice=notice,
             trail=self.trail.view(),
+            belief=self.beliefs.belief,
         )
 
     def close(self) -> None:

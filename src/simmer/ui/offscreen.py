@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 import pygame
 
+from simmer.ui.belief import paint_belief
 from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
@@ -60,6 +61,7 @@ class OffscreenRenderer:
         text: TextCache | None = None,
         *,
         show_trail: bool = True,
+        show_belief: bool = True,
     ) -> None:
         self.scene = scene
         if surface is None:
@@ -69,6 +71,8 @@ class OffscreenRenderer:
         self.painter = ScenePainter(scene)
         self.view = View(1.0, 0.0, 0.0)
         self.show_trail = show_trail
+        self.show_belief = show_belief
+        """Draw the program's belief (``robot.show``) when the snapshot has one."""
         self.static = pygame.Surface((1, 1))
         self._clean = self.static
         """The static layer without the trail."""
@@ -125,6 +129,11 @@ class OffscreenRenderer:
                 surface.blit(static, rect, rect)
         r = self.renderer
         r.dirty.clear()
+        if self.show_belief and snap.belief is not None:
+            maze = self.scene.maze
+            paint_belief(r, self.view, snap.belief, (maze.width, maze.height))
+            if len(r.dirty) > 1:  # thousands of particles: one rectangle to restore
+                r.dirty[:] = [r.dirty[0].unionall(r.dirty[1:])]
         self.painter.paint_dynamic(r, self.view, snap)
         paint_hud(r, snap, surface.get_width())
         if show_help:

@@ -54,6 +54,7 @@ REPLAY_HELP = (
     ("Home / End", "the start / the end"),
     ("timeline", "click or drag: go to that time"),
     ("T", "show / hide the path driven so far (clips show it)"),
+    ("B", "show / hide the program's belief, as it showed it"),
     ("P", "screenshot (simmer-*.png here)"),
     ("H", "show / hide this help"),
     ("Esc", "quit (or close the window)"),
@@ -287,6 +288,7 @@ class ReplayWindow:
             playhead.speed,
             self.show_help,
             self.canvas.show_trail,
+            self.canvas.show_belief,
             self.screen.get_size(),
         )
         if state == self._shown:
@@ -365,6 +367,8 @@ class ReplayWindow:
             playhead.seek(self.recording.duration)
         elif key == pygame.K_t:
             self.canvas.show_trail = not self.canvas.show_trail
+        elif key == pygame.K_b:
+            self.canvas.show_belief = not self.canvas.show_belief
         elif key == pygame.K_h:
             self.show_help = not self.show_help
         elif key == pygame.K_p:

@@ -34,6 +34,7 @@ import simmer
 from simmer.devices.base import Circle, Segment, Shape
 from simmer.errors import ConfigError, ReplayError
 from simmer.geometry import FloatArray, Pose, Vec2
+from simmer.localize.belief import Belief
 from simmer.record.runfolder import (
     EVENTS,
     MANIFEST,
@@ -57,6 +58,8 @@ from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event, ResetEvent
 from simmer.world.outcome import OutcomeReport
 from simmer.world.replay import feed, same_replies
+
+log = logging.getLogger("simmer.replay")
 
 __all__ = [
     "FPS",
@@ -125,6 +128,7 @@ class Frame:
     commands: tuple[CommandEvent, ...]
     switched_off: tuple[tuple[str, str], ...]
     trail: TrailView | None
+    belief: Belief | None
 
     @classmethod
     def of(cls, snap: Snapshot, previous: Frame | None = None) -> Frame:
@@ -146,6 +150,7 @@ class Frame:
             commands=commands,
             switched_off=snap.switched_off,
             trail=snap.trail,
+            belief=snap.belief,
         )
 
     def snapshot(self, *, paused: bool = False, speed: float = 1.0) -> Snapshot:
@@ -164,6 +169,7 @@ class Frame:
             commands=self.commands,
             switched_off=self.switched_off,
             trail=self.trail,
+            belief=self.belief,
             target=self.outcome.project.target if self.outcome and self.outcome.project else None,
         )
 
@@ -397,6 +403,14 @@ class Recording:
         )
         if incomplete is not None:
             incomplete += f"; replayed up to {collector.offset + sim.time:.2f} s"
+        beliefs = collector.maker.beliefs
+        if beliefs.bad:
+            log.warning(
+                "%d shown belief(s) in %s could not be read and are not drawn (the first %s)",
+                beliefs.bad,
+                folder / EVENTS,
+                beliefs.first_problem,
+            )
         commands = _commands(collector, events)
         check = Check(
             rows=_compared_rows(recorded, replayed),

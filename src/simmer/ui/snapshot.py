@@ -20,6 +20,7 @@ import numpy as np
 from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
+from simmer.localize.belief import Belief
 from simmer.ui.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
@@ -145,6 +146,8 @@ class Snapshot:
     """The path driven so far, if something keeps it."""
     target: str | None = None
     """The project's target zone (drawn in yellow), if the run has one."""
+    belief: Belief | None = None
+    """What the control program showed last of its belief (``robot.show``), if anything."""
 
     @property
     def outline(self) -> FloatArray:
@@ -166,6 +169,7 @@ class Snapshot:
         recording: str | None = None,
         notice: str | None = None,
         trail: TrailView | None = None,
+        belief: Belief | None = None,
     ) -> Snapshot:
         """Read a simulation now (only in the thread that owns it)."""
         robot = sim.robot
@@ -192,4 +196,5 @@ class Snapshot:
             notice=notice,
             trail=trail,
             target=sim.scenario.target,
+            belief=belief,
         )

@@ -221,6 +221,8 @@ class Window:
             self.show_help = not self.show_help
         elif key == pygame.K_t:
             self.canvas.show_trail = not self.canvas.show_trail
+        elif key == pygame.K_b:
+            self.canvas.show_belief = not self.canvas.show_belief
         elif key == pygame.K_v:
             # the path is used only if no video is being recorded
             post(ToggleVideo(new_file(self.save_dir, ".mp4")))

@@ -106,6 +106,33 @@ class RunEvent:
     detail: str = ""
 
 
+@dataclass(frozen=True)
+class BeliefEvent:
+    """A control program showed its belief (``robot.show``): ``belief`` is its JSON, already
+    cut to the documented bounds (:mod:`simmer.localize.belief`); ``cut`` counts the points
+    cut from it, ``skipped`` the whole show messages dropped since the last one shown. Not an
+    input: nothing the simulation answers depends on it."""
+
+    time: float
+    belief: str
+    cut: int = 0
+    skipped: int = 0
+    step: int = 0
+    client: str = ""
+
+
+@dataclass(frozen=True)
+class EstimateEvent:
+    """A control program reported where it believes it is (``robot.report_pose``, or the
+    pose it showed); ``truth`` is the robot's pose then. Not an input."""
+
+    time: float
+    pose: Pose
+    truth: Pose
+    step: int = 0
+    client: str = ""
+
+
 Event = (
     CommandEvent
     | StepEvent
@@ -116,8 +143,13 @@ Event = (
     | PlaceEvent
     | ReachedEvent
     | RunEvent
+    | BeliefEvent
+    | EstimateEvent
 )
 Observer = Callable[[Event], None]
 
 INPUTS = (CommandEvent, KeysEvent, PlaceEvent, ResetEvent)
 """The events a run's result depends on (with its configuration and seed)."""
+SHOWN = (BeliefEvent, EstimateEvent)
+"""What a program showed of its own belief: a replay shows them again at their steps, and
+nothing else in a run depends on them."""

@@ -20,10 +20,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simmer.geometry import Pose, polygon_gap
+from simmer.localize.metrics import LocalizationReport, Tracker
 from simmer.protocol import parse_message
 from simmer.world.events import (
     CollisionEvent,
     CommandEvent,
+    EstimateEvent,
     Event,
     PlaceEvent,
     ReachedEvent,
@@ -71,6 +73,8 @@ class OutcomeReport:
     project: ProjectReport | None = None
     """The course project's milestones and score (None unless the robot has a gripper and the
     maze has zones: a Lab 1 run's outcome is as before)."""
+    localization: LocalizationReport | None = None
+    """How well the program's reported poses matched the truth (None if it reported none)."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
@@ -78,6 +82,9 @@ class OutcomeReport:
         data["final_pose"] = list(self.final_pose)
         project = data.pop("project")
         data.update(project or {})
+        data.pop("localization")
+        if self.localization is not None:
+            data.update(self.localization.as_dict())
         return data
 
     def summary(self) -> str:
@@ -93,6 +100,8 @@ class OutcomeReport:
         )
         x, y, heading = self.final_pose
         project = [self.project.summary()] if self.project is not None else []
+        if self.localization is not None:
+            project.append(self.localization.summary())
         return "\n".join(
             [
                 f"outcome after {self.time:.2f} s: {task2}",
@@ -194,6 +203,8 @@ class Outcome:
         self.milestones: dict[str, float] = {}
         self.wrong_zone: tuple[str, float] | None = None
         self._held = False
+        self.localization = Tracker()
+        """The program's reported poses against the truth."""
 
     def __call__(self, event: Event) -> None:
         """Observe one simulation event."""
@@ -225,6 +236,8 @@ class Outcome:
             self.collisions += 1
             if self.first_collision is None:
                 self.first_collision = event.time
+        elif isinstance(event, EstimateEvent):
+            self.localization.add(event.time, event.pose, event.truth)
         elif isinstance(event, PlaceEvent):
             self._placed(event.pose)
         elif isinstance(event, ResetEvent):
@@ -359,4 +372,5 @@ class Outcome:
             final_pose=self.sim.robot.pose,
             busy_replies=self.busy_replies,
             project=self.project_report(),
+            localization=self.localization.report(),
         )

@@ -2,9 +2,11 @@
 
 A run depends only on its configuration, its seed and its inputs (commands, manual keys,
 placing the robot, resets: :data:`~simmer.world.events.INPUTS`), each applied at the step it
-happened. :func:`replay` applies them again to a new simulation (:func:`feed`: to one made
-with observers of its own) and says where a reply differs (a different SimMeR version, a
-changed device, a configuration that is not the same).
+happened. What the program showed of its belief (:data:`~simmer.world.events.SHOWN`) is
+passed on to the observers at its step, as it was shown. :func:`replay` applies them again
+to a new simulation (:func:`feed`: to one made with observers of its own) and says where a
+reply differs (a different SimMeR version, a changed device, a configuration that is not the
+same).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from dataclasses import dataclass, field
 from simmer.config.models import SimConfig
 from simmer.world.events import (
     INPUTS,
+    SHOWN,
     CommandEvent,
     Event,
     KeysEvent,
@@ -71,11 +74,13 @@ def feed(sim: Simulation, events: Iterable[Event], until_step: int | None = None
     last = 0
     for event in events:
         last = max(last, event.step)
-        if not isinstance(event, INPUTS):
+        if not isinstance(event, INPUTS + SHOWN):
             continue
         while sim.frame < event.step:
             sim.step()
-        if isinstance(event, CommandEvent):
+        if isinstance(event, SHOWN):
+            sim.emit(event)  # shown again for the observers (a replay's overlay, the outcome)
+        elif isinstance(event, CommandEvent):
             replies = sim.command(event.message, client=event.client)
             if not same_replies(replies, event.replies):
                 result.differences.append(

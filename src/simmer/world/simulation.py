@@ -12,9 +12,10 @@ import hashlib
 import logging
 import math
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from simmer.config.models import SimConfig
 from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
 from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_exception
 from simmer.geometry import (
+    FloatArray,
     Pose,
     place_polygon,
     polygon_hits_grid,
@@ -496,6 +498,16 @@ class Simulation:
         self._build()
         if self.observers:
             self.emit(ResetEvent(time, step))
+
+    def expected(
+        self, poses: Any, sensors: Sequence[str] | None = None, *, block: bool = True
+    ) -> FloatArray:
+        """Noise-free readings of ``sensors`` at many robot poses ((N, 3): x, y, heading),
+        with the simulator's own geometry: (N, S). See :func:`simmer.localize.expected.
+        expected` (ultrasonic, infrared and compass sensors; ``block=False``: walls only)."""
+        from simmer.localize.expected import expected
+
+        return expected(self, poses, sensors, block=block)
 
     def add_observer(self, observer: Observer) -> None:
         """Call ``observer(event)`` for every event of the run (see :mod:`simmer.world.events`)."""

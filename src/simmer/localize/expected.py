@@ -1,0 +1,255 @@
+"""Noise-free readings at many poses at once, with the simulator's own geometry.
+
+:func:`expected` answers for ultrasonic, infrared and compass sensors exactly what each reads
+with its noise off (the same ray-casting and floor kernels, :mod:`simmer.geometry`). Gyroscopes
+(they integrate turns: no function of the pose), motors, drives and device kinds of your own
+are refused by name. The ultrasonic fans are cast in parallel over the poses (Numba
+``prange``), so a lookup table of millions of poses takes seconds (:func:`table`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numba
+import numpy as np
+
+from simmer.devices.sensors import _DISK, Compass, Infrared, Ultrasonic
+from simmer.geometry import BoolArray, FloatArray, cast_fan, white_fraction, wrap_degrees
+
+if TYPE_CHECKING:
+    from simmer.world.simulation import Simulation
+
+SUPPORTED = ("ultrasonic", "infrared", "compass")
+"""Sensor kinds :func:`expected` answers for."""
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _fans(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    block_xy: FloatArray,
+    poses: FloatArray,
+    mount: FloatArray,
+    rays: int,
+    out: FloatArray,
+) -> None:
+    """Fill ``out[i]`` with the noise-free reading of one ultrasonic sensor at ``poses[i]``.
+
+    ``mount``: x, y, rotation, beamwidth, min_range, max_range, height above the block's top
+    (``block_xy[2]`` > 0: the block is there to be seen). The arithmetic is
+    :meth:`~simmer.devices.base.Device.world_pose`'s, then :func:`~simmer.geometry.cast_fan`
+    itself, so the readings are the sensor's own to the last bit.
+    """
+    px, py, rotation, beamwidth, low, high, above = (
+        mount[0],
+        mount[1],
+        mount[2],
+        mount[3],
+        mount[4],
+        mount[5],
+        mount[6],
+    )
+    with_block = block_xy[2] > 0.0
+    for i in numba.prange(poses.shape[0]):
+        scratch = np.empty(rays)  # each thread its own rays
+        rx, ry, rh = poses[i, 0], poses[i, 1], poses[i, 2]
+        rad = math.radians(rh)
+        c, s = math.cos(rad), math.sin(rad)
+        ox = rx + px * c - py * s
+        oy = ry + px * s + py * c
+        heading = rh + rotation
+        sees = False
+        if with_block:
+            d = math.hypot(block_xy[0] - ox, block_xy[1] - oy)
+            sees = math.degrees(math.atan2(above, d)) <= beamwidth / 2.0
+        best = cast_fan(
+            hwall, vwall, cell, fallback, block, sees, ox, oy, heading, beamwidth, high, scratch
+        )
+        out[i] = high if best == math.inf else min(max(best, low), high)
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _floors(
+    floor_white: BoolArray,
+    tile: float,
+    disk: FloatArray,
+    poses: FloatArray,
+    mount: FloatArray,
+    out: FloatArray,
+) -> None:
+    """Fill ``out[i]`` with an infrared sensor's noise-free reading at ``poses[i]`` (1 white,
+    0 black). ``mount``: x, y, radius, threshold; the arithmetic is the sensor's own."""
+    px, py, radius, threshold = mount[0], mount[1], mount[2], mount[3]
+    for i in numba.prange(poses.shape[0]):
+        rad = math.radians(poses[i, 2])
+        c, s = math.cos(rad), math.sin(rad)
+        x = poses[i, 0] + px * c - py * s
+        y = poses[i, 1] + px * s + py * c
+        fraction = white_fraction(floor_white, tile, x, y, radius, disk)
+        out[i] = 1.0 if fraction >= threshold else 0.0
+
+
+def _as_poses(poses: Any) -> FloatArray:
+    array = np.ascontiguousarray(poses, dtype=np.float64)
+    if array.ndim == 1 and array.shape[0] == 3:
+        array = array.reshape(1, 3)
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise ValueError(
+            f"poses must be (x, y, heading) rows, an array of shape (N, 3); got {array.shape}"
+        )
+    return array
+
+
+def expected(
+    sim: Simulation,
+    poses: Any,
+    sensors: Sequence[str] | None = None,
+    *,
+    block: bool = True,
+) -> FloatArray:
+    """Noise-free readings of ``sensors`` (default: every supported sensor) at ``poses``.
+
+    ``poses``: (N, 3) x, y, heading (inches, degrees from +y) of the robot. Returns (N, S), one
+    column per sensor in the order asked. ``block``: the block, where it is now, is seen by the
+    ultrasonic sensors as in the simulation (False: the walls alone, as for a table made before
+    anyone knows where the block is). A pose inside a wall is not refused: its rays start there.
+    """
+    array = _as_poses(poses)
+    devices = sim.robot.sensors
+    if sensors is None:
+        sensors = [i for i, d in devices.items() if isinstance(d, Ultrasonic | Infrared | Compass)]
+    out = np.empty((array.shape[0], len(sensors)), dtype=np.float64)
+    for column, sensor_id in enumerate(sensors):
+        device = devices.get(sensor_id)
+        if device is None:
+            known = ", ".join(devices) or "none"
+            raise ValueError(f"no sensor {sensor_id!r} on the robot; the sensors are: {known}")
+        out[:, column] = _column(sim, device, array, block)
+    return out
+
+
+def _column(sim: Simulation, device: Any, poses: FloatArray, block: bool) -> FloatArray:
+    column = np.empty(poses.shape[0], dtype=np.float64)
+    if isinstance(device, Ultrasonic):
+        s = device.settings
+        maze, cube = sim.maze, sim.block
+        above = device.height(sim) - cube.size
+        mount = np.array(
+            [*device.position, device.rotation, s.beamwidth, s.min_range, s.max_range, above]
+        )
+        where = np.array([cube.x, cube.y, 1.0 if block else 0.0])
+        _fans(
+            maze.hwall,
+            maze.vwall,
+            maze.cell,
+            maze.segments,
+            cube.segments,
+            where,
+            poses,
+            mount,
+            s.num_rays,
+            column,
+        )
+    elif isinstance(device, Infrared):
+        maze = sim.maze
+        mount = np.array([*device.position, device.radius, device.settings.threshold])
+        _floors(maze.floor_white, maze.tile, _DISK, poses, mount, column)
+    elif isinstance(device, Compass):
+        offset = device.rotation + device.settings.bias
+        column[:] = [wrap_degrees(float(h) + offset) for h in poses[:, 2]]
+    else:
+        kind = type(device).kind or "its own kind"
+        raise ValueError(
+            f"sensor {device.id!r} ({kind}): expected readings are for {', '.join(SUPPORTED)} "
+            "sensors (a gyroscope integrates turns, so its reading is no function of the pose)"
+        )
+    return column
+
+
+# ----------------------------------------------------------------------------- tables
+
+
+def parse_headings(text: str) -> FloatArray:
+    """``START:STOP:STEP`` in degrees (``0:360:1``: 360 headings, STOP left out) as an array."""
+    parts = text.split(":")
+    try:
+        start, stop, step = (float(p) for p in parts)
+    except ValueError:
+        raise ValueError(
+            f"headings {text!r}: write START:STOP:STEP in degrees, e.g. 0:360:1"
+        ) from None
+    if not all(map(math.isfinite, (start, stop, step))) or step <= 0 or stop <= start:
+        raise ValueError(f"headings {text!r}: STEP must be positive and STOP above START")
+    count = math.ceil((stop - start) / step - 1e-9)
+    if count > MAX_HEADINGS:
+        raise ValueError(
+            f"headings {text!r}: {count} headings, over {MAX_HEADINGS}; use a larger STEP"
+        )
+    return start + step * np.arange(count, dtype=np.float64)
+
+
+MAX_HEADINGS = 3600
+"""Most headings in a table (a tenth of a degree)."""
+MAX_TABLE_VALUES = 200_000_000
+"""Most readings in a table (1.6 GB as float64 while it is made); ``--step`` larger makes
+fewer."""
+
+
+def grid(sim: Simulation, step: float) -> tuple[FloatArray, FloatArray]:
+    """The x and y of a table's positions: every ``step`` inches, half a step from the edges."""
+    if not (math.isfinite(step) and step > 0):
+        raise ValueError(f"step must be a positive number of inches, not {step!r}")
+    maze = sim.maze
+    xs = np.arange(step / 2.0, maze.width, step)
+    ys = np.arange(step / 2.0, maze.height, step)
+    return xs, ys
+
+
+def table(
+    sim: Simulation,
+    step: float,
+    headings: FloatArray,
+    sensors: Sequence[str] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple[FloatArray, FloatArray, list[str], FloatArray]:
+    """Readings on a grid: (xs, ys, sensor ids, readings[y, x, heading, sensor]).
+
+    Positions in solid cells read NaN. The block is left out (a table is made before anyone
+    knows where the block is). ``progress(done, total)`` is called after each row of y.
+    """
+    xs, ys = grid(sim, step)
+    if sensors is None:
+        sensors = [
+            i
+            for i, d in sim.robot.sensors.items()
+            if isinstance(d, Ultrasonic | Infrared | Compass)
+        ]
+    sensors = list(sensors)
+    total = len(xs) * len(ys) * len(headings) * max(1, len(sensors))
+    if total > MAX_TABLE_VALUES:
+        raise ValueError(
+            f"{total:,} readings is over the limit of {MAX_TABLE_VALUES:,}; use a larger --step, "
+            "fewer headings or fewer sensors"
+        )
+    out = np.full((len(ys), len(xs), len(headings), len(sensors)), np.nan)
+    gx, gh = np.meshgrid(xs, headings, indexing="ij")
+    maze = sim.maze
+    for row, y in enumerate(ys):
+        cols = np.minimum((xs // maze.cell).astype(int), maze.cols - 1)
+        cell_row = min(int(y // maze.cell), maze.rows - 1)
+        open_x = ~maze.solid[cell_row, cols]
+        if open_x.any():
+            poses = np.column_stack(
+                (gx[open_x].ravel(), np.full(gh[open_x].size, y), gh[open_x].ravel())
+            )
+            values = expected(sim, poses, sensors, block=False)
+            out[row, open_x] = values.reshape(int(open_x.sum()), len(headings), len(sensors))
+        if progress is not None:
+            progress(row + 1, len(ys))
+    return xs, ys, sensors, out
