@@ -19,8 +19,8 @@ from simmer import Simulation
 from simmer.compat import utilities
 from simmer.compat.standins import UTILITIES, Vector2
 from simmer.compat.template import Environment, config_values
+from simmer.config.maze import Maze
 from simmer.config.models import Settings
-from simmer.world.maze import Maze
 
 from helpers import SIMMER_PY
 

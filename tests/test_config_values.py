@@ -16,15 +16,15 @@ import pytest
 from pydantic import BaseModel
 from typer.testing import CliRunner
 
+import simmer.config.maze
 import simmer.config.simmer_py
-import simmer.world.maze
 from simmer.cli import app
 from simmer.config import Settings, config_from_toml, load_config
 from simmer.config.models import MAX_CELLS_PER_SIDE, MAX_TIMEOUT
-from simmer.config.probe import probe_devices
 from simmer.devices import Device, World, get_device_kind, register_device_kind
 from simmer.errors import ConfigError
 from simmer.world import Maze
+from simmer.world.probe import probe_devices
 
 from helpers import REPO, SIMMER_PY, default_data, make_config
 
@@ -191,7 +191,7 @@ def no_floor_drawn(monkeypatch: pytest.MonkeyPatch) -> None:
     def refuse(*args: object) -> None:
         raise AssertionError(f"floor_pattern{args} was called")
 
-    monkeypatch.setattr(simmer.world.maze, "floor_pattern", refuse)
+    monkeypatch.setattr(simmer.config.maze, "floor_pattern", refuse)
 
 
 @pytest.mark.usefixtures("no_floor_drawn")

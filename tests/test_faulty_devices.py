@@ -18,7 +18,6 @@ from link_support import serving
 from simmer import Simulation
 from simmer.cli import app
 from simmer.client import connect
-from simmer.config.probe import probe_devices
 from simmer.devices import Device, DeviceParams, Shape, World, register_device_kind
 from simmer.errors import CommandError, ConfigIssue
 from simmer.ui.bridge import Bridge
@@ -26,6 +25,7 @@ from simmer.ui.hud import ALARM, BOX, COMMANDS_X, paint_hud
 from simmer.ui.render import RecordingRenderer
 from simmer.ui.scene import PANEL_HEIGHT, default_window_size
 from simmer.world.events import Event, StepEvent
+from simmer.world.probe import probe_devices
 
 from helpers import SIMMER_PY, default_data, make_config, make_sim
 

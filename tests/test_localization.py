@@ -23,8 +23,6 @@ from simmer.cli import app
 from simmer.client import Client, connect
 from simmer.geometry import Pose
 from simmer.localize.belief import MAX_PARTICLES, SHOWS_PER_SECOND, BeliefBoard, parse_belief
-from simmer.localize.expected import SUPPORTED, parse_headings, table
-from simmer.localize.metrics import LocalizationReport, Tracker, errors, localized_at
 from simmer.options import RunOptions
 from simmer.protocol import FRAME_HEADER
 from simmer.record.eventlog import read_events
@@ -32,6 +30,8 @@ from simmer.runner import LocalLink
 from simmer.serve import serve
 from simmer.world import Simulation
 from simmer.world.events import SHOWN, BeliefEvent, CommandEvent, EstimateEvent, Event, RunEvent
+from simmer.world.expected import SUPPORTED, parse_headings, table
+from simmer.world.localization import LocalizationReport, Tracker, errors, localized_at
 
 from helpers import EXAMPLES, REPO, make_config
 

@@ -12,12 +12,12 @@ import pytest
 from link_support import serving, two_port_raw, two_port_send
 from simmer import Simulation
 from simmer.config.models import SimConfig
+from simmer.config.scenario import robot_fits
+from simmer.config.zones import Zones
 from simmer.errors import ConfigError
 from simmer.geometry import polygon_hits_grid
 from simmer.record.runfolder import project_lines
 from simmer.world.outcome import Outcome
-from simmer.world.scenario import robot_fits
-from simmer.world.zones import Zones
 
 from helpers import EXAMPLES, make_config
 

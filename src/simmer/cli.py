@@ -211,7 +211,7 @@ def check(
         _report_config_warnings(loaded)
         if loaded.origin:
             out.print(loaded.origin, markup=False)
-        from simmer.config.probe import probe_devices
+        from simmer.world.probe import probe_devices
 
         issues = probe_devices(loaded)
     if issues:
@@ -510,7 +510,7 @@ def run(
     try:
         sim = Simulation(loaded, seed=seed)
     except Exception:  # a device's own constructor: say which, as `check` does
-        from simmer.config.probe import probe_devices
+        from simmer.world.probe import probe_devices
 
         _report_config_error(ConfigError(loaded.source, probe_devices(loaded)))
         raise typer.Exit(1) from None
@@ -518,7 +518,7 @@ def run(
     if loaded.origin:
         out.print(loaded.origin, markup=False)
     out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
-    from simmer.world.zones import project_run
+    from simmer.config.zones import project_run
 
     if project_run(loaded):
         out.print(f"scenario: {sim.scenario.describe()}", markup=False)
@@ -781,8 +781,8 @@ def table(
     ultrasonic, infrared and compass sensors, with the simulator's own geometry."""
     from rich.progress import Progress
 
-    from simmer.localize.expected import parse_headings
     from simmer.localize.files import write_table
+    from simmer.world.expected import parse_headings
 
     sim = _simulation(config)
     try:

@@ -244,7 +244,7 @@ def describe_noise(config: SimConfig, seed: int | None = None) -> str:
 def _project(config: SimConfig) -> str:
     """The zones and the target, for a project run or a configuration that names zones."""
     from simmer.config.project import ZoneSettings
-    from simmer.world.zones import Zones, project_run
+    from simmer.config.zones import Zones, project_run
 
     s = config.settings
     if not project_run(config) and s.zones == ZoneSettings():

@@ -50,7 +50,7 @@ from simmer.geometry import (
 )
 
 if TYPE_CHECKING:
-    from simmer.world.maze import Maze
+    from simmer.config.maze import Maze
 
 DEFAULT_KIND = {"motors": "motor", "drives": "drive"}
 CATEGORY_OF_GROUP = {"motors": "motor", "drives": "drive", "sensors": "sensor"}
@@ -430,7 +430,7 @@ def oversize_walls(walls: Any) -> ConfigIssue | None:
 def _check_sizes(settings: Settings) -> list[ConfigIssue]:
     """Refuse a floor or a drawing too large to hold, before the maze is built: floor tiles of
     1e-6 in asked for 32 PiB, a ``ppi`` of 1e300 for a window no screen can show."""
-    from simmer.world.maze import floor_tiles
+    from simmer.config.maze import floor_tiles
 
     s = settings
     rows, cols = len(s.walls), len(s.walls[0])
@@ -536,7 +536,7 @@ def _check_references(settings: Settings, declared: dict[str, list[str]]) -> lis
 def _check_placement(settings: Settings, found: _Found) -> None:
     """The robot must start in open floor; the block belongs there too, but an original
     config.py may hide it (outside the maze, in a solid cell, under the robot)."""
-    from simmer.world.maze import Block, Maze, robot_outline
+    from simmer.config.maze import Block, Maze, robot_outline
 
     maze = Maze.from_settings(settings)
     block = Block.from_settings(settings)
@@ -577,9 +577,9 @@ def _check_placement(settings: Settings, found: _Found) -> None:
 def check_project(settings: Settings) -> list[ConfigIssue]:
     """Zones on open cells of the maze, and a scenario that can be met (its start cell, block
     place and target zone), each mistake named by its key."""
-    from simmer.world.maze import Maze
-    from simmer.world.scenario import ScenarioError, check_cell, draw_scenario
-    from simmer.world.zones import Zones
+    from simmer.config.maze import Maze
+    from simmer.config.scenario import ScenarioError, check_cell, draw_scenario
+    from simmer.config.zones import Zones
 
     maze = Maze.from_settings(settings)
     z = settings.zones

@@ -96,7 +96,7 @@ class DeviceParams(BaseModel):
 
 
 class MazeView(Protocol):
-    """The maze as a device sees it (:class:`simmer.world.maze.Maze` is one): cells of side
+    """The maze as a device sees it (:class:`simmer.config.maze.Maze` is one): cells of side
     ``cell`` in, ``cells`` as the configuration's walls matrix (0: solid), wall lines
     ``hwall``/``vwall``, ``segments`` (rows of x1, y1, x2, y2) and the floor's tiles of side
     ``tile`` (``floor_white[row, column]``)."""
@@ -115,7 +115,7 @@ class MazeView(Protocol):
 
 
 class BlockView(Protocol):
-    """The block as a device sees it (:class:`simmer.world.maze.Block` is one): its centre,
+    """The block as a device sees it (:class:`simmer.config.maze.Block` is one): its centre,
     rotation and side, its outline ``segments``, and whether a gripper holds it."""
 
     x: float

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from simmer.geometry import FloatArray
-from simmer.localize.expected import table
 from simmer.localize.mapdata import map_data
+from simmer.world.expected import table
 from simmer.world.simulation import Simulation
 
 TABLE_SUFFIXES = (".npz", ".csv")
@@ -32,7 +32,7 @@ def write_table(
     sensors: Sequence[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> tuple[int, list[str]]:
-    """Compute a table (:func:`~simmer.localize.expected.table`) and write it; how many
+    """Compute a table (:func:`~simmer.world.expected.table`) and write it; how many
     readings, and the sensors.
 
     ``.npz``: ``readings[y, x, heading, sensor]`` (float32, NaN in solid cells), ``x``, ``y``,

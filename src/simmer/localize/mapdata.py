@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from simmer.config.maze import robot_outline
 from simmer.devices.sensors import Infrared, Ultrasonic
-from simmer.world.maze import robot_outline
 
 if TYPE_CHECKING:
     from simmer.devices.base import Device

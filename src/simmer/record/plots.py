@@ -40,17 +40,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import ValidationError
 
+from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.errors import SimmerError
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
-from simmer.localize.metrics import (
+from simmer.world.localization import (
     HEADING_TOLERANCE,
     MAX_ERRORS,
     POSITION_TOLERANCE,
     errors,
     localized_at,
 )
-from simmer.world.maze import Block, Maze, robot_outline
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -206,7 +206,7 @@ class RecordedRun:
     """A project run's start, block and target (the manifest's ``scenario``), if readable."""
     estimates: list[Estimate] = field(default_factory=list)
     """The program's reported poses (``robot.report_pose`` or shown), at most
-    :data:`~simmer.localize.metrics.MAX_ERRORS`."""
+    :data:`~simmer.world.localization.MAX_ERRORS`."""
 
 
 @dataclass(frozen=True)
@@ -686,8 +686,8 @@ def _draw_zones(ax: Axes, settings: Settings, target: str | None) -> None:
     yellow, each named in its first cell."""
     from matplotlib.patches import Rectangle
 
+    from simmer.config.zones import Zones
     from simmer.ui.scene import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
-    from simmer.world.zones import Zones
 
     zones = Zones.from_settings(settings)
     cell = settings.wall_segment_length

@@ -114,9 +114,9 @@ def _start_cells_figure(
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
+    from simmer.config.maze import Maze
+    from simmer.config.zones import Zones
     from simmer.sweep.runs import build_config
-    from simmer.world.maze import Maze
-    from simmer.world.zones import Zones
 
     settings = build_config(str(spec.configs[0]), ()).settings
     maze = Maze.from_settings(settings)
@@ -221,8 +221,8 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     with a marker for each kind of failure."""
     from matplotlib.figure import Figure
 
+    from simmer.config.maze import Maze
     from simmer.sweep.runs import build_config
-    from simmer.world.maze import Maze
 
     settings = build_config(str(spec.configs[0]), ()).settings
     maze = Maze.from_settings(settings)

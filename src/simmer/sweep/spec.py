@@ -453,8 +453,8 @@ def _answer(value: Any, kind: ControllerKind) -> str | None:
 def _is_project(config: Path) -> bool:
     """Whether a configuration is the course project's (a robot with a gripper)."""
     from simmer.config import load_config
+    from simmer.config.zones import project_run
     from simmer.errors import ConfigError
-    from simmer.world.zones import project_run
 
     try:
         return project_run(load_config(config))
@@ -477,11 +477,11 @@ def _every_scenario(grid: Any, config: Path) -> Any:
     if not wanted:
         return grid
     from simmer.config import load_config
+    from simmer.config.maze import Maze
     from simmer.config.project import HEADINGS
+    from simmer.config.scenario import start_cells
+    from simmer.config.zones import Zones
     from simmer.errors import ConfigError
-    from simmer.world.maze import Maze
-    from simmer.world.scenario import start_cells
-    from simmer.world.zones import Zones
 
     try:
         settings = load_config(config).settings

@@ -22,7 +22,7 @@ LOCALIZATION_FIELDS = (
     "final_position_error",
     "final_heading_error",
 )
-"""How well the program's reported poses matched the truth (:mod:`simmer.localize.metrics`);
+"""How well the program's reported poses matched the truth (:mod:`simmer.world.localization`);
 no value in a run whose program reported none."""
 OUTCOME_FIELDS = (
     "time",

@@ -156,7 +156,7 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
     for key in MANUAL_KEYS:
         _key_cap(r, key, lit=False)
     r.draw_text("h: help", (12, 78), DIM, 20)
-    from simmer.world.zones import project_run
+    from simmer.config.zones import project_run
 
     second = "project" if project_run(scene.config) else "Task 2 stopwatch"
     for label, y in zip(("time", second, "true pose", "collisions"), ROWS, strict=True):

@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simmer.config.zones import Zone, Zones, zones_shown
 from simmer.devices.base import Circle, Segment
 from simmer.geometry import FloatArray
 from simmer.ui.render import Color, Point, Renderer
 from simmer.ui.snapshot import HasScene, Snapshot
-from simmer.world.zones import Zone, Zones, zones_shown
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""

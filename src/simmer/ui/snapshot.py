@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from simmer.config.maze import Maze
 from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
@@ -24,7 +25,6 @@ from simmer.localize.belief import Belief
 from simmer.ui.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
-from simmer.world.maze import Maze
 from simmer.world.outcome import OutcomeReport
 from simmer.world.robot import Robot
 

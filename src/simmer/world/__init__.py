@@ -10,9 +10,9 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _LAZY = {
-    "Block": "simmer.world.maze",
-    "Maze": "simmer.world.maze",
-    "floor_pattern": "simmer.world.maze",
+    "Block": "simmer.config.maze",
+    "Maze": "simmer.config.maze",
+    "floor_pattern": "simmer.config.maze",
     "Robot": "simmer.world.robot",
     "Simulation": "simmer.world.simulation",
     **dict.fromkeys(
@@ -33,6 +33,7 @@ _LAZY = {
 }
 
 if TYPE_CHECKING:
+    from simmer.config.maze import Block, Maze, floor_pattern
     from simmer.world.events import (
         CollisionEndEvent,
         CollisionEvent,
@@ -45,7 +46,6 @@ if TYPE_CHECKING:
         RunEvent,
         StepEvent,
     )
-    from simmer.world.maze import Block, Maze, floor_pattern
     from simmer.world.robot import Robot
     from simmer.world.simulation import Simulation
 

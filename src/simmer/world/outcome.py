@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from simmer.config.zones import project_run
 from simmer.geometry import Pose, polygon_gap
-from simmer.localize.metrics import LocalizationReport, Tracker
 from simmer.protocol import parse_message
 from simmer.world.events import (
     CollisionEvent,
@@ -32,7 +32,7 @@ from simmer.world.events import (
     ResetEvent,
     StepEvent,
 )
-from simmer.world.zones import project_run
+from simmer.world.localization import LocalizationReport, Tracker
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation

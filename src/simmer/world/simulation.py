@@ -20,7 +20,10 @@ from typing import Any
 import numpy as np
 
 from simmer.config.loader import load_config
+from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import SimConfig
+from simmer.config.scenario import Scenario, draw_scenario
+from simmer.config.zones import Zones
 from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
 from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_exception
 from simmer.geometry import (
@@ -44,10 +47,7 @@ from simmer.world.events import (
     ResetEvent,
     StepEvent,
 )
-from simmer.world.maze import Block, Maze, robot_outline
 from simmer.world.robot import Robot
-from simmer.world.scenario import Scenario, draw_scenario
-from simmer.world.zones import Zones
 
 log = logging.getLogger("simmer")
 
@@ -503,9 +503,9 @@ class Simulation:
         self, poses: Any, sensors: Sequence[str] | None = None, *, block: bool = True
     ) -> FloatArray:
         """Noise-free readings of ``sensors`` at many robot poses ((N, 3): x, y, heading),
-        with the simulator's own geometry: (N, S). See :func:`simmer.localize.expected.
+        with the simulator's own geometry: (N, S). See :func:`simmer.world.expected.
         expected` (ultrasonic, infrared and compass sensors; ``block=False``: walls only)."""
-        from simmer.localize.expected import expected
+        from simmer.world.expected import expected
 
         return expected(self, poses, sensors, block=block)
 

@@ -1,4 +1,6 @@
-"""The maze (walls and floor pattern) and the block (BEHAVIOUR §2-3)."""
+"""The maze (walls and floor pattern) and the block (BEHAVIOUR §2-3), as a configuration
+describes them. Here, with the configuration, because validating one needs the geometry (a
+robot or block placed in a wall, a zone on a solid cell); the world steps the same objects."""
 
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ import numpy as np
 from simmer.config.models import DeviceSpec, SimConfig
 from simmer.devices import get_device_kind
 from simmer.errors import CommandError, ConfigIssue, describe_exception
+from simmer.world.simulation import Simulation
 
 DEVICE_FAULTS = (Exception, SystemExit)
 """What a device's code may raise that ``check`` reports rather than stopping on: any error,
@@ -47,8 +48,6 @@ def probe_devices(config: SimConfig) -> list[ConfigIssue]:
     becomes one issue on its key (``sensors.t0``). A :class:`~simmer.errors.CommandError` from
     ``simulate`` is the device refusing a value, which is allowed, so it is not reported.
     """
-    from simmer.world.simulation import Simulation  # here: the simulation imports this module
-
     source = Path(config.source)
     base = source.parent if source.is_file() else None
     try:

@@ -14,8 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simmer.config.maze import Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.config.project import HEADINGS, Cell
+from simmer.config.zones import Zones
 from simmer.geometry import (
     Pose,
     place_polygon,
@@ -24,8 +26,6 @@ from simmer.geometry import (
     rectangle,
     wrap_degrees,
 )
-from simmer.world.maze import Maze, robot_outline
-from simmer.world.zones import Zones
 
 BLOCK_TRIES = 1000
 """Draws of a block place before giving up (a loading zone too small for the block)."""
