@@ -205,9 +205,10 @@ def test_jaws_closed_on_nothing_grip_nothing_until_opened() -> None:
 
 def test_bad_gripper_values_answer_nan() -> None:
     sim = block_at(6.0, 39.0)
-    reasons: list[tuple[int, str]] = []
-    assert math.isnan(sim.command("g0-2", reasons)[0])
-    assert "1 closes, 0 opens" in reasons[0][1]
+    (answer,) = sim.answer(sim.parse("g0-2"), "g0-2")
+    assert math.isnan(answer.value)
+    assert answer.why is not None
+    assert "1 closes, 0 opens" in answer.why
 
 
 def test_picking_up_while_moving_and_carrying_it() -> None:

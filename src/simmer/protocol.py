@@ -197,6 +197,9 @@ class Decoded:
     lockstep clock counts as taken once the message is answered (see :func:`parse_clock`)."""
     meta: bool = False
     """A localization message (persistent protocol, ``%...``; see :func:`decode_meta`)."""
+    commands: tuple[Command, ...] = ()
+    """The commands of ``text``, parsed once where the message was decoded (empty: not parsed,
+    a clock or localization message, or no text)."""
 
 
 def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
@@ -227,11 +230,17 @@ def _not_text(exc: UnicodeDecodeError, encoding: str) -> str:
 
 
 def decode_message(
-    data: bytes, encoding: str = "utf-8", *, size: int = 0, clock: bool = False
+    data: bytes,
+    encoding: str = "utf-8",
+    *,
+    size: int = 0,
+    clock: bool = False,
+    lenient: bool = False,
 ) -> Decoded:
-    """Decode the bytes of one message (line ending already removed, or not); the limits are
-    checked before anything else is done with it. ``size`` and ``clock`` go into the result
-    (:attr:`Decoded.size`, :attr:`Decoded.clock`)."""
+    """Decode the bytes of one message (line ending already removed, or not) and parse its
+    commands (``lenient``: the originals' way, :func:`parse_command`); the limits are checked
+    before anything else is done with it. ``size`` and ``clock`` go into the result
+    (:attr:`Decoded.size`, :attr:`Decoded.clock`; a clock message is not parsed here)."""
     count = data.count(b",") + 1
     if (refused := over_limit(len(data), count)) is not None:
         return replace(refused, size=size)
@@ -239,7 +248,9 @@ def decode_message(
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
         return Decoded(None, count, _not_text(exc, encoding), size=size, clock=clock)
-    return Decoded(text.rstrip("\r\n"), count, size=size, clock=clock)
+    text = text.rstrip("\r\n")
+    commands = () if clock else tuple(parse_message(text, lenient=lenient))
+    return Decoded(text, count, size=size, clock=clock, commands=commands)
 
 
 def pack_replies(values: Sequence[float], width: int = 4) -> bytes:
@@ -321,11 +332,13 @@ class PackedCodec:
 
     width: int = 4
     encoding: str = "utf-8"
+    lenient: bool = False
+    """Parse commands the original SimMeR's way (a run of an original ``config.py``)."""
     keeps: ClassVar[str] = "first"
 
     def decode(self, data: bytes) -> Decoded:
-        """The text of the bytes (see :func:`decode_message`)."""
-        return decode_message(data, self.encoding)
+        """The text of the bytes and its commands (see :func:`decode_message`)."""
+        return decode_message(data, self.encoding, lenient=self.lenient)
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """The values packed, no framing."""
@@ -369,6 +382,8 @@ class FramedCodec:
     end: str = "]"
     round_digits: int = 3
     encoding: str = "ascii"
+    lenient: bool = False
+    """Parse commands the original SimMeR's way (a run of an original ``config.py``)."""
     keeps: ClassVar[str] = "all"
 
     def decode(self, data: bytes) -> Decoded:
@@ -397,7 +412,9 @@ class FramedCodec:
         if error is not None:
             ids = tuple(command_ids(commands))
             return Decoded(None, len(ids), error, ids)
-        return Decoded(commands, count)
+        return Decoded(
+            commands, count, commands=tuple(parse_message(commands, lenient=self.lenient))
+        )
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """One frame with an ``id:value`` entry per command, in order."""

@@ -32,6 +32,7 @@ from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, pr
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
+from simmer.world.simulation import Answer
 
 log = logging.getLogger("simmer.runner")
 
@@ -223,9 +224,10 @@ class Runner:
             request.reasons.append(error)
             replies = [math.nan] * decoded.count
         else:
-            records: list[tuple[int, str]] = []
-            replies = self.sim.command(decoded.text, records, request.client)
-            self._report(printable(request.client), records, request.reasons)
+            commands = decoded.commands or self.sim.parse(decoded.text)
+            answers = self.sim.answer(commands, decoded.text, request.client)
+            replies = [answer.value for answer in answers]
+            self._report(printable(request.client), answers, request.reasons)
         request.future.set_result(replies)
         return replies
 
@@ -373,10 +375,11 @@ class Runner:
                 waiting.append(wait)
         self._waits = waiting
 
-    def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
-        """Log the first few (level, text) records of one message and count the rest (and no
-        more than the client's budget, :class:`_LogBudget`); keep the first
+    def _report(self, client: str, answers: list[Answer], reasons: list[str]) -> None:
+        """Log why the first few NaN answers of one message are NaN and count the rest (and
+        no more than the client's budget, :class:`_LogBudget`); keep the first
         :data:`MAX_REASONS` for the client."""
+        records = [(a.level, a.why) for a in answers if a.why is not None]
         for level, text in records[:MAX_LOGGED]:
             self._log.log(client, level, "%s: %s", client, text)
         more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])

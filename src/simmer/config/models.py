@@ -268,10 +268,13 @@ class SimConfig:
     def reply_codec(self) -> ReplyCodec:
         """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""
         s = self.settings
+        lenient = s.lenient_commands
         if s.protocol == "packed":
-            return PackedCodec(s.reply_bytes, s.str_encoding)
+            return PackedCodec(s.reply_bytes, s.str_encoding, lenient)
         categories = {spec.id: spec.group[:-1] for spec in self.devices}
-        return FramedCodec(categories, s.frame_start, s.frame_end, s.round_digits, s.str_encoding)
+        return FramedCodec(
+            categories, s.frame_start, s.frame_end, s.round_digits, s.str_encoding, lenient
+        )
 
     def device(self, device_id: str) -> DeviceSpec:
         """The device with this id (KeyError if none)."""

@@ -618,11 +618,14 @@ class StreamServer(_Server):
         encoding: str = "utf-8",
         timeout: float = 300.0,
         idle_timeout: float = 3600.0,
+        lenient: bool = False,
     ) -> None:
         super().__init__(bus, host, [port], timeout, idle_timeout)
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
+        self.lenient = lenient
+        """Parse commands the original SimMeR's way (a run of an original ``config.py``)."""
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A persistent connection, listed among the bus's clients while open."""
@@ -700,8 +703,12 @@ class _StreamConnection(_Connection):
             elif line.startswith(META_PREFIX):
                 self.submit(decode_meta(line, end + 1))
             else:
+                stream = self.stream
                 clock = line.startswith(CLOCK_PREFIX)
-                self.submit(decode_message(line, self.stream.encoding, size=end + 1, clock=clock))
+                decoded = decode_message(
+                    line, stream.encoding, size=end + 1, clock=clock, lenient=stream.lenient
+                )
+                self.submit(decoded)
         self.rearm()
         self.update_events()
 

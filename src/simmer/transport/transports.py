@@ -60,6 +60,7 @@ class Transports:
                 encoding=settings.str_encoding,
                 timeout=settings.timeout,
                 idle_timeout=settings.idle_timeout,
+                lenient=settings.lenient_commands,
             )
             if options.serial or options.serial_link is not None:
                 self.serial = SerialServer(

@@ -15,7 +15,7 @@ import threading
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -57,6 +57,20 @@ device included); it switches that device off. Ctrl-C still stops everything."""
 MANUAL_SPEED = 6.0  # in/s, BEHAVIOUR §3
 MANUAL_TURN = 120.0  # deg/s
 MANUAL_KEYS = "wasdqe"
+
+
+class Answer(NamedTuple):
+    """One command's reply ``value`` and, for a NaN, ``why`` (logged at ``level`` by whoever
+    reports it)."""
+
+    value: float
+    level: int = logging.DEBUG
+    why: str | None = None
+
+    @classmethod
+    def nan(cls, level: int, why: str) -> Answer:
+        """A NaN reply and why."""
+        return cls(math.nan, level, why)
 
 
 class Simulation:
@@ -172,25 +186,37 @@ class Simulation:
 
     # ----------------------------------------------------------------- commands
 
-    def command(
-        self, message: str, reasons: list[tuple[int, str]] | None = None, client: str = ""
-    ) -> list[float]:
+    def command(self, message: str, client: str = "") -> list[float]:
         """Execute a message such as ``"w0-6,u0"``; one reply value per command, in order.
 
         A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
-        an unknown device answers NaN and logs why (or adds it to ``reasons``, see
-        :meth:`execute`). ``client`` names the sender in the event stream.
-        """
+        an unknown device answers NaN and logs why. ``client`` names the sender in the event
+        stream. (A transport parses a message once, as it decodes it, and calls
+        :meth:`answer`, which returns why with each value.)"""
+        answers = self.answer(self.parse(message), message, client)
+        for answer in answers:
+            if answer.why is not None:
+                log.log(answer.level, "%s", answer.why)
+        return [answer.value for answer in answers]
+
+    def parse(self, message: str) -> tuple[Command, ...]:
+        """The commands of a message, read as this configuration says (strictly, or the
+        original SimMeR's lenient way)."""
+        return tuple(parse_message(message, lenient=self._lenient))
+
+    def answer(self, commands: Sequence[Command], message: str, client: str = "") -> list[Answer]:
+        """Execute the parsed ``commands`` of ``message``: each one's value and, for a NaN,
+        why (the caller logs as much of that as it wants and tells the client)."""
         if self._owner is not None:
             self._check_thread("command")
-        commands = parse_message(message, lenient=self._lenient)
         for command in commands:
             if command.lenient:
                 self._warn_lenient(command)
-        replies = [self.execute(command, reasons) for command in commands]
+        answers = [self.execute(command) for command in commands]
         if self.observers:
-            self.emit(CommandEvent(self._time, message, tuple(replies), self.frame, client))
-        return replies
+            replies = tuple(answer.value for answer in answers)
+            self.emit(CommandEvent(self._time, message, replies, self.frame, client))
+        return answers
 
     def _warn_lenient(self, command: Command) -> None:
         """Say once per device and rule that a command was read the originals' way."""
@@ -207,74 +233,32 @@ class Simulation:
                 LENIENT_RULES[rule],
             )
 
-    def execute(self, command: Command, reasons: list[tuple[int, str]] | None = None) -> float:
-        """Execute one parsed command and return its reply value.
-
-        Why a command answers NaN is logged; given ``reasons``, each (level, text) record goes
-        there instead (with a busy drive's too), so the caller can log a bounded number per
-        message and tell the client.
-        """
+    def execute(self, command: Command) -> Answer:
+        """Execute one parsed command: its reply value and, for a NaN, why."""
+        text = printable(command.text)
         if command.error is not None:
-            return self._nan(
-                reasons,
-                logging.WARNING,
-                "bad command '%s': %s",
-                printable(command.text),
-                printable(command.error),
-            )
+            return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
         if command.device == STOP_ID:
             self._robot.stop()
-            return math.inf
+            return Answer(math.inf)
         if command.device in self._switched_off:
-            return self._nan(
-                reasons,
-                logging.DEBUG,
-                "command '%s': device %s is switched off",
-                printable(command.text),
-                command.device,
-            )
+            why = f"command '{text}': device {command.device} is switched off"
+            return Answer.nan(logging.DEBUG, why)
         device = self._robot.devices.get(command.device)
         if device is None:
-            return self._nan(
-                reasons,
-                logging.WARNING,
-                "bad command '%s': no device '%s' on the robot",
-                printable(command.text),
-                printable(command.device),
-            )
+            why = f"bad command '{text}': no device '{printable(command.device)}' on the robot"
+            return Answer.nan(logging.WARNING, why)
         try:
             value = float(device.simulate(command.value, self))
         except CommandError as exc:
-            return self._nan(
-                reasons,
-                logging.WARNING,
-                "bad command '%s': %s",
-                printable(command.text),
-                printable(str(exc)),
-            )
+            return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(str(exc))}")
         except DEVICE_FAULTS as exc:
             self._switch_off(device, f"command {command.text!r}", exc)
-            return self._nan(
-                reasons,
-                logging.DEBUG,
-                "command '%s': device %s raised and is switched off",
-                printable(command.text),
-                command.device,
-            )
-        if reasons is not None and math.isnan(value) and command.device in self._robot.drives:
-            reasons.append((logging.DEBUG, f"'{printable(command.text)}': a drive is still moving"))
-        return value
-
-    @staticmethod
-    def _nan(
-        reasons: list[tuple[int, str]] | None, level: int, message: str, *args: object
-    ) -> float:
-        """Answer NaN: log why, or add the record to ``reasons`` (see :meth:`execute`)."""
-        if reasons is None:
-            log.log(level, message, *args)
-        else:
-            reasons.append((level, message % args))
-        return math.nan
+            why = f"command '{text}': device {command.device} raised and is switched off"
+            return Answer.nan(logging.DEBUG, why)
+        if math.isnan(value) and command.device in self._robot.drives:
+            return Answer.nan(logging.DEBUG, f"'{text}': a drive is still moving")
+        return Answer(value)
 
     # ----------------------------------------------------------------- time
 
