@@ -6,7 +6,7 @@ import contextlib
 import errno
 import logging
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NoReturn
@@ -21,6 +21,8 @@ from simmer.ports import STREAM_PORT
 
 if TYPE_CHECKING:
     from simmer.config import SimConfig
+    from simmer.options import RunOptions
+    from simmer.serve import Served
     from simmer.ui.replay_model import Recording
     from simmer.world import Simulation
 
@@ -462,9 +464,7 @@ def run(
     With --program, the run ends when the program exits (with its exit status), at --seconds
     of simulated time (status 3) or at --timeout wall seconds (status 124).
     """
-    from simmer.config import load_config, summarize, with_settings
     from simmer.serve import parse_speed
-    from simmer.world import Simulation
 
     lockstep = (clock or (Clock.lockstep if program else Clock.realtime)) == Clock.lockstep
     if speed is None:
@@ -497,31 +497,8 @@ def run(
         "port_rx": port_rx or None,  # 0 is no setting: the transport lines say which port
         "port_tx": port_tx or None,
     }
-    given = {key: value for key, value in overrides.items() if value is not None}
-    flags = " ".join(f"--{key.replace('_', '-')} {value}" for key, value in given.items())
-    try:
-        loaded = load_config(config)
-        if given:  # checked as the file's own settings are (port_rx == port_tx ...)
-            loaded = with_settings(loaded, given, f"{loaded.source} with {flags}")
-    except ConfigError as exc:
-        _report_config_error(exc)
-        raise typer.Exit(1) from None
-    loaded = _with_scenario(loaded, start=start, block=block, target=target)
-    try:
-        sim = Simulation(loaded, seed=seed)
-    except Exception:  # a device's own constructor: say which, as `check` does
-        from simmer.world.probe import probe_devices
-
-        _report_config_error(ConfigError(loaded.source, probe_devices(loaded)))
-        raise typer.Exit(1) from None
-    _report_config_warnings(loaded)
-    if loaded.origin:
-        out.print(loaded.origin, markup=False)
-    out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
-    from simmer.config.zones import project_run
-
-    if project_run(loaded):
-        out.print(f"scenario: {sim.scenario.describe()}", markup=False)
+    loaded = _run_config(config, overrides, start=start, block=block, target=target)
+    sim = _run_simulation(loaded, seed)
     if answer is not None and sim.scenario.target is not None:
         answer = answer.replace("{target}", sim.scenario.target)
     from simmer.errors import SimmerError
@@ -570,22 +547,73 @@ def run(
     except OSError as exc:
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
+    _say_how_it_went(served, options, log_file)
+    raise typer.Exit(served.exit_status)
+
+
+def _run_config(
+    config: Path | None, overrides: Mapping[str, object], **scenario: str | None
+) -> SimConfig:
+    """The run's configuration: the file, the command line's settings checked as the file's
+    own are (two equal ports are refused before any port opens), then ``--start``,
+    ``--block`` and ``--target``; a mistake is reported and ends the command."""
+    from simmer.config import load_config, with_settings
+
+    given = {key: value for key, value in overrides.items() if value is not None}
+    flags = " ".join(f"--{key.replace('_', '-')} {value}" for key, value in given.items())
+    try:
+        loaded = load_config(config)
+        if given:
+            loaded = with_settings(loaded, given, f"{loaded.source} with {flags}")
+    except ConfigError as exc:
+        _report_config_error(exc)
+        raise typer.Exit(1) from None
+    return _with_scenario(loaded, **scenario)
+
+
+def _run_simulation(loaded: SimConfig, seed: int | None) -> Simulation:
+    """The simulation of ``loaded`` (a device that fails to build is reported as `check`
+    reports it), and the start-up lines: warnings, the release, the summary, the scenario."""
+    from simmer.config import summarize
+    from simmer.config.zones import project_run
+    from simmer.world import Simulation
+
+    try:
+        sim = Simulation(loaded, seed=seed)
+    except Exception:  # a device's own constructor: say which, as `check` does
+        from simmer.world.probe import probe_devices
+
+        _report_config_error(ConfigError(loaded.source, probe_devices(loaded)))
+        raise typer.Exit(1) from None
+    _report_config_warnings(loaded)
+    if loaded.origin:
+        out.print(loaded.origin, markup=False)
+    out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
+    if project_run(loaded):
+        out.print(f"scenario: {sim.scenario.describe()}", markup=False)
+    return sim
+
+
+def _say_how_it_went(served: Served, options: RunOptions, log_file: Path | None) -> None:
+    """The outcome, where the recording is, and (with a program) why the run ended."""
     out.print(served.outcome.report().summary(), markup=False)
     if served.recording_stopped is not None:
         err.print(served.recording_stopped, style="bold red", markup=False)
-    elif record is not None:
-        out.print(f"recorded in {record}; the report is {record / 'report.md'}", markup=False)
-    if program is not None:
+    elif options.record is not None:
+        report = options.record / "report.md"
+        out.print(f"recorded in {options.record}; the report is {report}", markup=False)
+    if options.program is not None:
         if served.ended_by == "program":
             ended = f"the program exited with status {served.program_status}"
         elif served.ended_by == "seconds":
-            ended = f"the limit of {seconds} s of simulated time was reached"
+            ended = f"the limit of {options.seconds} s of simulated time was reached"
         elif served.ended_by == "timeout":
-            ended = f"the {timeout} s wall-clock timeout was reached; the program was stopped"
+            ended = (
+                f"the {options.timeout} s wall-clock timeout was reached; the program was stopped"
+            )
         else:
             ended = "the run was stopped"
         out.print(f"run ended: {ended}; log: {log_file}", markup=False)
-    raise typer.Exit(served.exit_status)
 
 
 def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
