@@ -30,9 +30,9 @@ from simmer.localize.expected import parse_headings, table
 from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
-from simmer.ui.maker import LocalControls, SnapshotMaker
 from simmer.ui.offscreen import OffscreenRenderer
-from simmer.ui.snapshot import StaticScene
+from simmer.view.maker import LocalControls, SnapshotMaker
+from simmer.view.snapshot import StaticScene
 
 TARGET_TABLE_SECONDS = 10.0
 TARGET_FRAME_MS = 8.0

@@ -313,9 +313,8 @@ def _headless_pygame() -> None:
 def _follow_for_frames(sim: Simulation) -> None:
     """Keep the path the robot drives and the last commands, for a failure's last frame to
     show."""
-    _headless_pygame()
-    from simmer.ui.hud import CommandLog
-    from simmer.ui.trail import Trail
+    from simmer.view.commands import CommandLog
+    from simmer.view.trail import Trail
 
     sim.add_observer(Trail(sim.robot.pose))
     sim.add_observer(CommandLog())
@@ -332,9 +331,9 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
         _headless_pygame()
         import pygame
 
-        from simmer.ui.maker import LocalControls, SnapshotMaker
         from simmer.ui.offscreen import OffscreenRenderer
-        from simmer.ui.snapshot import StaticScene
+        from simmer.view.maker import LocalControls, SnapshotMaker
+        from simmer.view.snapshot import StaticScene
 
         key = id(sim.config)
         kept = _CANVASES.pop(key, None) or (sim.config, OffscreenRenderer(StaticScene.of(sim)))

@@ -6,7 +6,7 @@ a video is exactly what the window showed. It keeps the static layer (floor, wal
 labels) cached per surface size and restores only what the previous frame drew over it.
 Creating one needs no pygame display (only fonts), so it works on a machine without a screen.
 
-The trail (:mod:`simmer.ui.trail`) is painted into the static layer as it grows, each new
+The trail (:mod:`simmer.view.trail`) is painted into the static layer as it grows, each new
 piece once, under the robot; the layer is put back to its clean copy only when the trail
 starts again (a reset, thinning, a replay seeking backwards) or is hidden.
 """
@@ -21,8 +21,8 @@ from simmer.ui.belief import paint_belief
 from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
-from simmer.ui.snapshot import HasScene, Snapshot
-from simmer.ui.trail import TrailView
+from simmer.view.snapshot import HasScene, Snapshot
+from simmer.view.trail import TrailView
 
 __all__ = ["OffscreenRenderer", "even_size", "static_layer"]
 

@@ -21,7 +21,7 @@ from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
 from simmer.localize.belief import Belief
-from simmer.ui.trail import TrailView
+from simmer.view.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
 from simmer.world.maze import Maze
