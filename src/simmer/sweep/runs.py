@@ -17,7 +17,6 @@ import copy
 import ctypes
 import hashlib
 import importlib
-import io
 import json
 import os
 import signal
@@ -329,8 +328,6 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
     (after which ``sim`` is at its start again); none if they cannot be drawn."""
     try:
         _headless_pygame()
-        import pygame
-
         from simmer.ui.offscreen import OffscreenRenderer
         from simmer.view.maker import LocalControls, SnapshotMaker
         from simmer.view.snapshot import StaticScene
@@ -341,7 +338,6 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
         while len(_CANVASES) > WARM.size:
             _CANVASES.popitem(last=False)
         canvas = kept[1]
-        width, height = canvas.surface.get_size()
 
         def picture() -> bytes:
             maker = SnapshotMaker(sim)  # the HUD shows the run's outcome, which observes sim
@@ -350,12 +346,8 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
                 canvas.draw(maker.snapshot(LocalControls(sim, speed=None)))
             finally:
                 maker.close()
-            small = pygame.transform.smoothscale(
-                canvas.surface, (width // FRAME_SCALE, height // FRAME_SCALE)
-            )
-            data = io.BytesIO()
-            pygame.image.save(small, data, "png")
-            return data.getvalue()
+            png: bytes = canvas.png(FRAME_SCALE)
+            return png
 
         last = picture()
         sim.observers.clear()

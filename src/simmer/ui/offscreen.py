@@ -13,6 +13,7 @@ starts again (a reset, thinning, a replay seeking backwards) or is hidden.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 
 import pygame
@@ -97,6 +98,14 @@ class OffscreenRenderer:
         self._clean = self.static.copy()
         self._trail = None
         self.invalidate()
+
+    def png(self, shrink: int = 1) -> bytes:
+        """The surface as PNG bytes, smoothly shrunk ``shrink`` times (a sweep's small frames)."""
+        width, height = self.surface.get_size()
+        small = pygame.transform.smoothscale(self.surface, (width // shrink, height // shrink))
+        data = io.BytesIO()
+        pygame.image.save(small, data, "png")
+        return data.getvalue()
 
     def invalidate(self) -> None:
         """Repaint the whole surface at the next :meth:`draw` (something else drew on it)."""
