@@ -1,6 +1,6 @@
 """When a video's frames are due and which video files can be written: pygame-free, so a
-recorded run's trace, a replay's timeline and the command line's checks share them with the
-video recorder without importing it."""
+replay's timeline (:mod:`simmer.view.replay_model`) and the command line's checks share them
+with the video recorder (:mod:`simmer.ui.video`) without importing pygame."""
 
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ EPSILON = 1e-9
 
 
 def check_video_path(path: str | Path, fps: int = FPS) -> Path:
-    """``path`` as a :class:`Path` if it names a video this module writes at ``fps`` frames a
-    second; ValueError saying why not."""
+    """``path`` as a :class:`Path` if it names a video :mod:`simmer.ui.video` writes at
+    ``fps`` frames a second; ValueError saying why not."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in VIDEO_SUFFIXES:

@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from simmer.colors import Color
 from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
@@ -27,8 +28,6 @@ from simmer.world.events import CommandEvent
 from simmer.world.maze import Maze
 from simmer.world.outcome import OutcomeReport
 from simmer.world.robot import Robot
-
-Color = tuple[int, int, int]
 
 
 class HasScene(Protocol):
