@@ -29,9 +29,9 @@ from simmer.client import connect
 from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.transport import Transports
-from simmer.ui.maker import LocalControls, SnapshotMaker
 from simmer.ui.offscreen import OffscreenRenderer
-from simmer.ui.snapshot import StaticScene
+from simmer.view.maker import LocalControls, SnapshotMaker
+from simmer.view.snapshot import StaticScene
 from simmer.world.expected import parse_headings, table
 
 TARGET_TABLE_SECONDS = 10.0

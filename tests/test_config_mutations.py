@@ -29,7 +29,7 @@ from simmer.devices import get_device_kind
 from simmer.errors import ConfigError
 from simmer.ui.render import PygameRenderer
 from simmer.ui.scene import PANEL_HEIGHT, ScenePainter, View, default_window_size
-from simmer.ui.snapshot import Snapshot, StaticScene
+from simmer.view.snapshot import Snapshot, StaticScene
 
 from helpers import EXAMPLES, REPO, default_data
 

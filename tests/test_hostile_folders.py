@@ -21,7 +21,7 @@ from simmer.config import load_config
 from simmer.record import RunRecorder
 from simmer.record.plots import read_run
 from simmer.record.runfolder import MAX_RUN_SECONDS
-from simmer.ui.replay_model import Recording
+from simmer.view.replay_model import Recording
 
 from helpers import drive_noisily, noisy_config
 

@@ -322,7 +322,7 @@ def test_showing_changes_no_reply_and_no_timing_under_lockstep(tmp_path: Path) -
 
 
 def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
-    from simmer.ui.replay_model import Recording
+    from simmer.view.replay_model import Recording
 
     folder = tmp_path / "run"
     example_run(tmp_path, record=folder)
@@ -347,7 +347,7 @@ def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
 def test_a_hostile_belief_in_a_run_folder_is_one_line_and_the_rest_replays(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    from simmer.ui.replay_model import Recording
+    from simmer.view.replay_model import Recording
 
     folder = tmp_path / "run"
     example_run(tmp_path, record=folder)

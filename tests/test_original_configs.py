@@ -27,7 +27,8 @@ from simmer.config import load_config
 from simmer.config.loader import ORIGINAL_RUNS
 from simmer.devices import Ultrasonic
 from simmer.errors import ConfigError
-from simmer.ui import Snapshot, render_scene
+from simmer.ui import render_scene
+from simmer.view.snapshot import Snapshot
 
 from helpers import SIMMER_PY, default_data, make_config
 

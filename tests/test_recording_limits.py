@@ -19,7 +19,7 @@ import pytest
 
 from simmer import Simulation
 from simmer.record import RunRecorder, read_events
-from simmer.ui.replay_model import Recording
+from simmer.view.replay_model import Recording
 
 from helpers import drive_noisily, noisy_config
 

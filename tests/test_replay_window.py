@@ -21,6 +21,7 @@ from typer.testing import CliRunner
 
 from simmer import Simulation
 from simmer.cli import app
+from simmer.colors import TRAIL_COLOR
 from simmer.errors import ReplayError
 from simmer.record import RunRecorder
 from simmer.ui.hud import LIT, paint_hud
@@ -33,8 +34,7 @@ from simmer.ui.replay import (
     replay_window_size,
     short_client,
 )
-from simmer.ui.replay_model import FPS, SPEEDS, Playhead, Recording, Timeline
-from simmer.ui.scene import TRAIL_COLOR
+from simmer.view.replay_model import FPS, SPEEDS, Playhead, Recording, Timeline
 
 from helpers import LAB_SEQUENCE, noisy_config
 

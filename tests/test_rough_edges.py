@@ -27,8 +27,10 @@ from simmer.protocol import Decoded, parse_command, printable
 from simmer.runner import Runner
 from simmer.serve import serve
 from simmer.transport.bus import Request
-from simmer.ui import RecordingRenderer, Snapshot
-from simmer.ui.hud import CommandLog, RepeatedCommand, paint_hud
+from simmer.ui import RecordingRenderer
+from simmer.ui.hud import paint_hud
+from simmer.view.commands import CommandLog, RepeatedCommand
+from simmer.view.snapshot import Snapshot
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event
 

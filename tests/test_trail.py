@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from simmer.geometry import Pose
-from simmer.ui.trail import Trail
+from simmer.view.trail import Trail
 from simmer.world.events import PlaceEvent, ResetEvent, StepEvent
 
 

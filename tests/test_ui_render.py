@@ -12,21 +12,21 @@ import pygame
 import pytest
 
 from simmer import Simulation
+from simmer.colors import BLACK_TILE, WHITE_TILE
 from simmer.devices.base import Segment
 from simmer.ui import (
     Bridge,
     PygameRenderer,
     RecordingRenderer,
     ScenePainter,
-    Snapshot,
-    StaticScene,
     View,
     Window,
     render_scene,
 )
 from simmer.ui.hud import COMMANDS_X, LIT, PATH_X, ROWS, TEXT, VALUE_X, paint_hud
 from simmer.ui.render import TextCache, merge_rects
-from simmer.ui.scene import BLACK_TILE, PANEL_HEIGHT, WHITE_TILE, default_window_size
+from simmer.ui.scene import PANEL_HEIGHT, default_window_size
+from simmer.view.snapshot import Snapshot, StaticScene
 
 from helpers import LAB_SEQUENCE, make_sim, run_sequence
 
@@ -299,9 +299,9 @@ def test_hud_image_after_reaching_the_block(tmp_path: Path) -> None:
 def test_a_snapshot_maker_shares_the_observers_a_simulation_has_already() -> None:
     """A frame drawn after a run (a sweep's last frame) shows the run's own last commands,
     outcome and trail, not empty ones of its own."""
-    from simmer.ui.hud import CommandLog
-    from simmer.ui.maker import LocalControls, SnapshotMaker
-    from simmer.ui.trail import Trail
+    from simmer.view.commands import CommandLog
+    from simmer.view.maker import LocalControls, SnapshotMaker
+    from simmer.view.trail import Trail
 
     sim = Simulation.from_config()
     log, trail = CommandLog(), Trail(sim.robot.pose)

@@ -23,6 +23,7 @@ import pytest
 
 from simmer import Simulation
 from simmer.client import connect
+from simmer.colors import TRAIL_COLOR
 from simmer.geometry import Pose
 from simmer.localize.messages import Localization
 from simmer.options import RunOptions
@@ -33,7 +34,6 @@ from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
 from simmer.ui.render import RecordingRenderer
-from simmer.ui.scene import TRAIL_COLOR
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 

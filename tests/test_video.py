@@ -27,8 +27,9 @@ from simmer.ui.hud import ALARM, HELP, paint_hud
 from simmer.ui.offscreen import OffscreenRenderer, even_size
 from simmer.ui.render import RecordingRenderer
 from simmer.ui.scene import ScenePainter, View, default_window_size
-from simmer.ui.snapshot import StaticScene
-from simmer.ui.video import FrameClock, VideoRecorder, check_video_path
+from simmer.ui.video import VideoRecorder
+from simmer.view.frames import FrameClock, check_video_path
+from simmer.view.snapshot import StaticScene
 from simmer.world.events import StepEvent
 
 pytestmark = pytest.mark.timeout(180)

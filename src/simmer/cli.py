@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from simmer.config import SimConfig
     from simmer.options import RunOptions
     from simmer.serve import Served
-    from simmer.ui.replay_model import Recording
+    from simmer.view.replay_model import Recording
     from simmer.world import Simulation
 
 
@@ -663,7 +663,7 @@ def _check_video(path: Path, *, force: bool) -> None:
     """Refuse a video file that cannot be written, or that exists unless ``force``, before any
     port opens; make its folder if it is missing (as --record does: ``--video runs/task1.mp4``
     in a new project)."""
-    from simmer.ui.video import check_video_path
+    from simmer.view.frames import check_video_path
 
     try:
         check_video_path(path)
@@ -892,7 +892,7 @@ def _load_recording(
     one line if it cannot be replayed."""
     from simmer.errors import ReplayError
     from simmer.record.runfolder import MAX_RUN_SECONDS
-    from simmer.ui.replay_model import Recording
+    from simmer.view.replay_model import Recording
 
     out.print(f"re-simulating the run in {folder} ...", markup=False)
     try:

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import ValidationError
 
+from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.errors import SimmerError
@@ -85,9 +86,6 @@ LOCALIZATION_WORDS = (LOCALIZATION_IMAGE, "The program's estimate against the tr
 IMAGES = ((PATH_IMAGE, "The robot's true path"), (SENSORS_IMAGE, "Sensor readings against time"))
 """The images :func:`plot_run` draws, with the words report.md shows for each."""
 
-WHITE_TILE = (235, 235, 235)
-BLACK_TILE = (30, 30, 30)
-"""Floor tile colours, as the window paints them (:mod:`simmer.ui.scene`)."""
 PATH_COLOR = "#ff8c00"
 COMMAND_COLOR = "#1f3b73"
 NAN_COLOR = "#d7191c"
@@ -687,7 +685,6 @@ def _draw_zones(ax: Axes, settings: Settings, target: str | None) -> None:
     from matplotlib.patches import Rectangle
 
     from simmer.config.zones import Zones
-    from simmer.ui.scene import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
 
     zones = Zones.from_settings(settings)
     cell = settings.wall_segment_length

@@ -17,7 +17,6 @@ import copy
 import ctypes
 import hashlib
 import importlib
-import io
 import json
 import os
 import signal
@@ -313,9 +312,8 @@ def _headless_pygame() -> None:
 def _follow_for_frames(sim: Simulation) -> None:
     """Keep the path the robot drives and the last commands, for a failure's last frame to
     show."""
-    _headless_pygame()
-    from simmer.ui.hud import CommandLog
-    from simmer.ui.trail import Trail
+    from simmer.view.commands import CommandLog
+    from simmer.view.trail import Trail
 
     sim.add_observer(Trail(sim.robot.pose))
     sim.add_observer(CommandLog())
@@ -330,11 +328,9 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
     (after which ``sim`` is at its start again); none if they cannot be drawn."""
     try:
         _headless_pygame()
-        import pygame
-
-        from simmer.ui.maker import LocalControls, SnapshotMaker
         from simmer.ui.offscreen import OffscreenRenderer
-        from simmer.ui.snapshot import StaticScene
+        from simmer.view.maker import LocalControls, SnapshotMaker
+        from simmer.view.snapshot import StaticScene
 
         key = id(sim.config)
         kept = _CANVASES.pop(key, None) or (sim.config, OffscreenRenderer(StaticScene.of(sim)))
@@ -342,7 +338,6 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
         while len(_CANVASES) > WARM.size:
             _CANVASES.popitem(last=False)
         canvas = kept[1]
-        width, height = canvas.surface.get_size()
 
         def picture() -> bytes:
             maker = SnapshotMaker(sim)  # the HUD shows the run's outcome, which observes sim
@@ -351,12 +346,8 @@ def _frames(sim: Simulation, seed: int) -> dict[str, bytes]:
                 canvas.draw(maker.snapshot(LocalControls(sim, speed=None)))
             finally:
                 maker.close()
-            small = pygame.transform.smoothscale(
-                canvas.surface, (width // FRAME_SCALE, height // FRAME_SCALE)
-            )
-            data = io.BytesIO()
-            pygame.image.save(small, data, "png")
-            return data.getvalue()
+            png: bytes = canvas.png(FRAME_SCALE)
+            return png
 
         last = picture()
         sim.observers.clear()

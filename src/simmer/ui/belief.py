@@ -8,8 +8,9 @@ import math
 
 import numpy as np
 
+from simmer.colors import Color
 from simmer.localize.belief import Belief
-from simmer.ui.render import Color, Renderer
+from simmer.ui.render import Renderer
 from simmer.ui.scene import View, tint
 
 BELIEF_COLOR: Color = (140, 40, 200)

@@ -4,7 +4,7 @@ The window never calls the :class:`~simmer.world.Simulation` (DESIGN habit 3). I
 <Bridge.post>` small immutable actions (keys held, reset, pause, step, speed, place the robot,
 quit) on a queue; the thread that owns the simulation calls :meth:`Bridge.sync` between steps
 (it is the :class:`~simmer.runner.Runner`'s ``on_frame`` hook, at most ~60 times a second), which
-applies them and publishes a fresh :class:`~simmer.ui.snapshot.Snapshot` by one reference
+applies them and publishes a fresh :class:`~simmer.view.snapshot.Snapshot` by one reference
 assignment to :attr:`Bridge.latest`. Nothing mutable is shared: the queue is thread-safe, the
 snapshot never changes.
 
@@ -21,9 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from simmer.geometry import FloatArray, Pose
-from simmer.ui.maker import Controls, LocalControls, SnapshotMaker
-from simmer.ui.snapshot import Snapshot, StaticScene, frozen_array
 from simmer.ui.video import VideoRecorder
+from simmer.view.maker import Controls, LocalControls, SnapshotMaker
+from simmer.view.snapshot import Snapshot, StaticScene, frozen_array
 from simmer.world import Simulation
 
 __all__ = [

@@ -1,6 +1,6 @@
 """A clip of a recorded run (``simmer render DIR --from T1 --to T2 -o clip.mp4``).
 
-The frames of a :class:`~simmer.ui.replay_model.Recording` between two times, drawn off-screen
+The frames of a :class:`~simmer.view.replay_model.Recording` between two times, drawn off-screen
 by the window's own :class:`~simmer.ui.offscreen.OffscreenRenderer` (trail included) at the
 window's size rounded down to even numbers, and encoded one by one as they are drawn by the
 video's writers (:func:`simmer.ui.video.open_writer`): H.264 MP4 or GIF, :data:`FPS` frames a
@@ -15,9 +15,10 @@ import pygame
 
 from simmer.errors import ReplayError
 from simmer.ui.offscreen import OffscreenRenderer, even_size
-from simmer.ui.replay_model import Recording
 from simmer.ui.scene import default_window_size
-from simmer.ui.video import check_video_path, open_writer
+from simmer.ui.video import open_writer
+from simmer.view.frames import check_video_path
+from simmer.view.replay_model import Recording
 
 __all__ = ["clip_frames", "write_clip"]
 

@@ -3,23 +3,22 @@ collisions, path length, busy and NaN replies), pose, commands, help, the file a
 video went to, and a red warning for each device switched off because its code raised.
 
 The outcome is the simulation's own :class:`~simmer.world.outcome.Outcome` (the figures a
-headless run prints); it and :class:`CommandLog` observe the simulation in its thread, and the
-painters read only a :class:`~simmer.ui.snapshot.Snapshot` (and the static configuration).
+headless run prints); it and :class:`~simmer.view.commands.CommandLog` observe the simulation
+in its thread, and the painters read only a :class:`~simmer.view.snapshot.Snapshot` (and the
+static configuration).
 """
 
 from __future__ import annotations
 
 import math
-from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass
 
-from simmer.ui.render import Color, Renderer
-from simmer.ui.scene import PANEL_HEIGHT, TRAIL_COLOR, tint
-from simmer.ui.snapshot import HasScene, Snapshot
-from simmer.world.events import CommandEvent, Event
+from simmer.colors import TRAIL_COLOR, Color
+from simmer.ui.render import Renderer
+from simmer.ui.scene import PANEL_HEIGHT, tint
+from simmer.view.commands import RepeatedCommand
+from simmer.view.snapshot import HasScene, Snapshot
 from simmer.world.outcome import OutcomeReport
-from simmer.world.replay import same_replies
 from simmer.world.simulation import MANUAL_KEYS
 
 KEY_LAYOUT = (("q", "w", "e"), ("a", "s", "d"))
@@ -56,47 +55,6 @@ HELP = (
     ("stopwatch", "Task 2: from the first motion until reached"),
     ("busy", "a drive command refused while a drive moves"),
 )
-
-
-@dataclass(frozen=True)
-class RepeatedCommand(CommandEvent):
-    """A message answered the same way ``count`` times in a row; ``time`` is the last one's."""
-
-    count: int = 1
-
-
-class CommandLog:
-    """The last few messages and their replies, collected from the simulation's events.
-
-    A message answered as the one before it was (``wait_idle()`` polling ``w0-0`` until the
-    drive is done) extends that entry's count instead of taking a line, so the student's own
-    commands stay on screen.
-    """
-
-    def __init__(self, size: int = 5) -> None:
-        self.entries: deque[CommandEvent] = deque(maxlen=size)
-
-    def __call__(self, event: Event) -> None:
-        """Observe one simulation event."""
-        if not isinstance(event, CommandEvent):
-            return
-        last = self.entries[-1] if self.entries else None
-        if (
-            last is None
-            or last.message != event.message
-            or not same_replies(last.replies, event.replies)
-        ):
-            self.entries.append(event)
-            return
-        count = last.count if isinstance(last, RepeatedCommand) else 1
-        self.entries[-1] = RepeatedCommand(
-            time=event.time,
-            message=event.message,
-            replies=event.replies,
-            step=event.step,
-            client=event.client,
-            count=count + 1,
-        )
 
 
 def reply_text(value: float) -> str:

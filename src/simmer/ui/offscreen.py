@@ -6,13 +6,14 @@ a video is exactly what the window showed. It keeps the static layer (floor, wal
 labels) cached per surface size and restores only what the previous frame drew over it.
 Creating one needs no pygame display (only fonts), so it works on a machine without a screen.
 
-The trail (:mod:`simmer.ui.trail`) is painted into the static layer as it grows, each new
+The trail (:mod:`simmer.view.trail`) is painted into the static layer as it grows, each new
 piece once, under the robot; the layer is put back to its clean copy only when the trail
 starts again (a reset, thinning, a replay seeking backwards) or is hidden.
 """
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 
 import pygame
@@ -21,8 +22,8 @@ from simmer.ui.belief import paint_belief
 from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
-from simmer.ui.snapshot import HasScene, Snapshot
-from simmer.ui.trail import TrailView
+from simmer.view.snapshot import HasScene, Snapshot
+from simmer.view.trail import TrailView
 
 __all__ = ["OffscreenRenderer", "even_size", "static_layer"]
 
@@ -97,6 +98,14 @@ class OffscreenRenderer:
         self._clean = self.static.copy()
         self._trail = None
         self.invalidate()
+
+    def png(self, shrink: int = 1) -> bytes:
+        """The surface as PNG bytes, smoothly shrunk ``shrink`` times (a sweep's small frames)."""
+        width, height = self.surface.get_size()
+        small = pygame.transform.smoothscale(self.surface, (width // shrink, height // shrink))
+        data = io.BytesIO()
+        pygame.image.save(small, data, "png")
+        return data.getvalue()
 
     def invalidate(self) -> None:
         """Repaint the whole surface at the next :meth:`draw` (something else drew on it)."""

@@ -13,9 +13,7 @@ from typing import Protocol
 
 import pygame
 
-Color = tuple[int, int, int]
-Point = tuple[float, float]
-Rect = tuple[float, float, float, float]
+from simmer.colors import Color, Point, Rect
 
 
 class Renderer(Protocol):

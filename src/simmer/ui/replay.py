@@ -1,11 +1,11 @@
 """The replay window: a recorded run played back, with its commands beside it and a timeline.
 
-``simmer replay DIR`` re-simulates the run first (:class:`~simmer.ui.replay_model.Recording`,
+``simmer replay DIR`` re-simulates the run first (:class:`~simmer.view.replay_model.Recording`,
 in this thread, before the window opens), then shows it here: the maze and HUD drawn by the
 same :class:`~simmer.ui.offscreen.OffscreenRenderer` as the live window and videos (with the
 trail), the command list in a panel on the right with the current command highlighted, and
 a timeline along the bottom to click or drag. Everything runs in the main thread; the
-window's keys only move the :class:`~simmer.ui.replay_model.Playhead`, and drawing picks the
+window's keys only move the :class:`~simmer.view.replay_model.Playhead`, and drawing picks the
 frame it points at, so seeking costs one frame's drawing.
 """
 
@@ -18,14 +18,15 @@ from pathlib import Path
 
 import pygame
 
+from simmer.colors import Color
 from simmer.errors import SimmerError
 from simmer.ui.hud import ALARM, BOX, DIM, LIT, TEXT, UNLIT, reply_text
 from simmer.ui.offscreen import OffscreenRenderer
-from simmer.ui.render import Color, PygameRenderer, Renderer, TextCache
-from simmer.ui.replay_model import Playhead, Recording, ReplayCommand
+from simmer.ui.render import PygameRenderer, Renderer, TextCache
 from simmer.ui.scene import PANEL_HEIGHT, base_scene_size, default_window_size, tint
-from simmer.ui.snapshot import HasScene
 from simmer.ui.window import HIDDEN_DRIVERS, new_file, save_screenshot
+from simmer.view.replay_model import Playhead, Recording, ReplayCommand
+from simmer.view.snapshot import HasScene
 
 __all__ = ["REPLAY_HELP", "ReplayWindow", "paint_panel", "paint_timeline", "run_replay"]
 

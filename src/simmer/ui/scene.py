@@ -2,7 +2,7 @@
 
 The static layer (background, floor tiles, walls, inch rulers) is painted once per window size
 from the configuration and maze; the dynamic layer (block, robot, device outlines, sensor
-measurements) every frame from a :class:`~simmer.ui.snapshot.Snapshot`, never from the live
+measurements) every frame from a :class:`~simmer.view.snapshot.Snapshot`, never from the live
 simulation, so painting can run in another thread than the one stepping it.
 """
 
@@ -13,26 +13,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simmer.colors import (
+    BLACK_TILE,
+    DROPOFF_COLOR,
+    GHOST_COLOR,
+    LOADING_COLOR,
+    RULER_COLOR,
+    TARGET_COLOR,
+    TRAIL_COLOR,
+    WHITE_TILE,
+    Color,
+    Point,
+)
 from simmer.config.zones import Zone, Zones, zones_shown
 from simmer.devices.base import Circle, Segment
 from simmer.geometry import FloatArray
-from simmer.ui.render import Color, Point, Renderer
-from simmer.ui.snapshot import HasScene, Snapshot
+from simmer.ui.render import Renderer
+from simmer.view.snapshot import HasScene, Snapshot
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""
-WHITE_TILE: Color = (235, 235, 235)
-BLACK_TILE: Color = (30, 30, 30)
-GHOST_COLOR: Color = (255, 90, 90)
-RULER_COLOR: Color = (220, 235, 235)
-TRAIL_COLOR: Color = (255, 140, 0)
-"""The path driven so far: orange, as on path.png, visible on white and black tiles."""
-LOADING_COLOR: Color = (40, 110, 230)
-"""The loading zone's outline on the floor: blue."""
-DROPOFF_COLOR: Color = (20, 170, 60)
-"""A drop-off zone's outline: green."""
-TARGET_COLOR: Color = (250, 200, 0)
-"""The run's target zone: yellow, over its green outline."""
 ZONE_INSET = 0.7
 """Inches between a zone's outline and the walls, so both show."""
 ZONE_LINE = 0.45
@@ -99,7 +99,7 @@ def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
 class ScenePainter:
     """Draws one simulation's maze, block, robot and sensors with any :class:`Renderer`.
 
-    ``scene``: a :class:`~simmer.ui.snapshot.StaticScene` (or the simulation itself, read
+    ``scene``: a :class:`~simmer.view.snapshot.StaticScene` (or the simulation itself, read
     only here, for its configuration and maze).
     """
 

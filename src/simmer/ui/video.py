@@ -5,7 +5,7 @@ each time a step's simulated time reaches the next multiple of ``1 / fps`` (coun
 recording started, going on across resets), so a lockstep run that takes one second of wall
 time still gives a video that plays at real speed, and a paused run adds no frames. In the
 simulation's thread the observer only builds the immutable
-:class:`~simmer.ui.snapshot.Snapshot`; a writer thread draws it with the window's own drawing
+:class:`~simmer.view.snapshot.Snapshot`; a writer thread draws it with the window's own drawing
 code (:class:`~simmer.ui.offscreen.OffscreenRenderer`) and encodes it at once, so memory does
 not grow with the run's length and the simulation never waits for the encoder unless the
 writer falls a bounded number of frames behind.
@@ -25,7 +25,6 @@ Formats, by the file's suffix (PyAV and Pillow are imported only when a video is
 from __future__ import annotations
 
 import logging
-import math
 import queue
 import sys
 import threading
@@ -37,30 +36,24 @@ from typing import TYPE_CHECKING, BinaryIO, Protocol, cast
 import numpy as np
 import pygame
 
+from simmer.colors import Color
 from simmer.ui.hud import HUD_COLORS, legend
-from simmer.ui.maker import Controls, LocalControls, SnapshotMaker
 from simmer.ui.offscreen import OffscreenRenderer, even_size
-from simmer.ui.render import Color
 from simmer.ui.scene import ScenePainter, default_window_size
-from simmer.ui.snapshot import HasScene, Snapshot, StaticScene
+from simmer.view.frames import FPS, FrameClock, check_video_path
+from simmer.view.maker import Controls, LocalControls, SnapshotMaker
+from simmer.view.snapshot import HasScene, Snapshot, StaticScene
 from simmer.world import Simulation
-from simmer.world.events import Event, ResetEvent, StepEvent
+from simmer.world.events import Event
 
 if TYPE_CHECKING:
     import av.container
     from PIL import Image
 
-__all__ = ["FPS", "VIDEO_SUFFIXES", "FrameClock", "VideoRecorder", "check_video_path"]
+__all__ = ["VideoRecorder"]
 
 log = logging.getLogger("simmer.video")
 
-FPS = 30
-"""Frames per simulated second, unless told otherwise."""
-VIDEO_SUFFIXES = (".mp4", ".gif")
-MAX_FPS = 240
-"""More frames a second than steps only repeat frames (60 steps a second by default)."""
-GIF_MAX_FPS = 50
-"""GIF delays are whole centiseconds and viewers slow down delays under 2 cs."""
 BACKLOG = 32
 """Snapshots waiting for the writer at most; then the simulation waits (bounded memory)."""
 ENCODER_BACKLOG = 4
@@ -76,20 +69,6 @@ H264_OPTIONS = {
 quantization and the macroblock tree put back (they halve the file for a little more time)."""
 TRANSPARENT = 255
 """The GIF palette index of a pixel unchanged since the frame before."""
-EPSILON = 1e-9
-
-
-def check_video_path(path: str | Path, fps: int = FPS) -> Path:
-    """``path`` as a :class:`Path` if it names a video this module writes at ``fps`` frames a
-    second; ValueError saying why not."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in VIDEO_SUFFIXES:
-        raise ValueError(f"a video file ends in .mp4 or .gif, not {path.name!r}")
-    limit = GIF_MAX_FPS if suffix == ".gif" else MAX_FPS
-    if not 1 <= fps <= limit:
-        raise ValueError(f"frames per second must be 1 to {limit} for {suffix}, not {fps}")
-    return path
 
 
 class FrameWriter(Protocol):
@@ -268,31 +247,6 @@ def open_writer(path: Path, size: tuple[int, int], fps: int, scene: HasScene) ->
     if path.suffix.lower() == ".gif":
         return GifWriter(path, size, fps, scene_colors(scene))
     return Mp4Writer(path, size, fps)
-
-
-class FrameClock:
-    """When frames are due: one each ``1 / fps`` simulated seconds from ``start``, the first at
-    ``start`` itself, going on across resets (the simulation's clock restarts, the video's
-    does not)."""
-
-    def __init__(self, fps: int, start: float) -> None:
-        self.fps = fps
-        self.frames = 0
-        """Frames due so far."""
-        self._start = start
-        self._offset = 0.0  # simulated seconds before the last reset
-
-    def due(self, event: Event) -> int:
-        """How many more frames are due after ``event`` (a step may reach several frame times
-        when frames are more frequent than steps); counts them as done."""
-        if isinstance(event, ResetEvent):
-            self._offset += event.time
-        if not isinstance(event, StepEvent):
-            return 0
-        elapsed = self._offset + event.time - self._start
-        count = max(0, math.floor(elapsed * self.fps + EPSILON) + 1 - self.frames)
-        self.frames += count
-        return count
 
 
 class VideoRecorder:

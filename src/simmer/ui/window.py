@@ -6,7 +6,7 @@ moment a message arrives) with :meth:`Bridge.sync <simmer.ui.bridge.Bridge.sync>
 ``on_frame`` hook, and keeps pygame in the calling (main) thread, as macOS requires. Each
 :meth:`Window.frame` reads the events and turns them into actions posted to the bridge (it never
 calls the :class:`~simmer.world.Simulation`), draws the latest
-:class:`~simmer.ui.snapshot.Snapshot` and flips, however long the flip blocks (vsync, a slow X
+:class:`~simmer.view.snapshot.Snapshot` and flips, however long the flip blocks (vsync, a slow X
 server). Esc, closing the window or Ctrl-C stops and joins the simulation thread.
 
 Tests drive both sides in one thread for determinism: post events, :meth:`Window.frame`,
@@ -48,7 +48,7 @@ from simmer.ui.bridge import (
 )
 from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.scene import ScenePainter, View, default_window_size
-from simmer.ui.snapshot import Snapshot
+from simmer.view.snapshot import Snapshot
 from simmer.world import Simulation
 
 if TYPE_CHECKING:

@@ -17,18 +17,17 @@ from typing import Protocol
 
 import numpy as np
 
+from simmer.colors import Color
 from simmer.config.maze import Maze
 from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
 from simmer.localize.belief import Belief
-from simmer.ui.trail import TrailView
+from simmer.view.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
 from simmer.world.outcome import OutcomeReport
 from simmer.world.robot import Robot
-
-Color = tuple[int, int, int]
 
 
 class HasScene(Protocol):

@@ -14,9 +14,9 @@ from typing import Protocol
 
 from simmer.geometry import FloatArray
 from simmer.localize.belief import BeliefBoard
-from simmer.ui.hud import CommandLog
-from simmer.ui.snapshot import RobotLayout, Snapshot
-from simmer.ui.trail import Trail
+from simmer.view.commands import CommandLog
+from simmer.view.snapshot import RobotLayout, Snapshot
+from simmer.view.trail import Trail
 from simmer.world import Simulation
 from simmer.world.events import Observer
 from simmer.world.outcome import Outcome

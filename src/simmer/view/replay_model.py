@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 import simmer
+from simmer.colors import Color
 from simmer.devices.base import Circle, Segment, Shape
 from simmer.errors import ConfigError, ReplayError
 from simmer.geometry import FloatArray, Pose, Vec2
@@ -49,11 +50,10 @@ from simmer.record.runfolder import (
 )
 from simmer.record.trace import TraceWriter
 from simmer.record.tracecheck import TraceDifference, TraceRows, first_difference, read_trace_rows
-from simmer.ui.maker import LocalControls, SnapshotMaker
-from simmer.ui.render import Color
-from simmer.ui.snapshot import RobotLayout, Snapshot, StaticScene
-from simmer.ui.trail import TrailView
-from simmer.ui.video import FPS, FrameClock
+from simmer.view.frames import FPS, FrameClock
+from simmer.view.maker import LocalControls, SnapshotMaker
+from simmer.view.snapshot import RobotLayout, Snapshot, StaticScene
+from simmer.view.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event, ResetEvent
 from simmer.world.outcome import OutcomeReport
