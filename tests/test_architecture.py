@@ -108,8 +108,9 @@ def test_a_headless_package_never_imports_pygame(package: str) -> None:
         seen.add(name)
         for imported in imports(by_name[name], top_level_only=True):
             assert imported.split(".")[0] != "pygame", f"{name} imports {imported}"
-            while imported and imported not in by_name:  # `from simmer.x import y` of a name
-                imported = imported.rpartition(".")[0]
-            while imported:  # importing a module imports its packages' __init__ too
-                todo.append(imported)
-                imported = imported.rpartition(".")[0]
+            module = imported
+            while module and module not in by_name:  # `from simmer.x import y` of a name
+                module = module.rpartition(".")[0]
+            while module:  # importing a module imports its packages' __init__ too
+                todo.append(module)
+                module = module.rpartition(".")[0]
