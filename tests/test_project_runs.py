@@ -16,11 +16,12 @@ import pytest
 from PIL import Image
 
 from simmer import Simulation
+from simmer.errors import SweepError
 from simmer.options import RunOptions
 from simmer.record.plots import plot_run
 from simmer.record.runfolder import load_run, retrace
 from simmer.serve import serve
-from simmer.sweep.spec import SweepError, load_sweep, sweep_from_dict
+from simmer.sweep.spec import load_sweep, sweep_from_dict
 from simmer.sweep.success import success_condition
 from simmer.ui.scene import (
     DROPOFF_COLOR,

@@ -18,11 +18,11 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
+from simmer.errors import SweepError
 from simmer.record.runfolder import load_run
 from simmer.sweep import (
     RunResult,
     RunSpec,
-    SweepError,
     SweepSpec,
     apply_overrides,
     build_config,

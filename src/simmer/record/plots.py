@@ -41,7 +41,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from simmer.config.models import Settings
-from simmer.errors import SimmerError
+from simmer.errors import PlotError
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
 from simmer.localize.metrics import (
     HEADING_TOLERANCE,
@@ -107,10 +107,6 @@ MAX_POSE_VALUE = 1e9
 """A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
 is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
 300 digits across the title."""
-
-
-class PlotError(SimmerError):
-    """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
 
 
 @dataclass(frozen=True)

@@ -24,9 +24,9 @@ import tty
 from dataclasses import replace
 from pathlib import Path
 
-from simmer.errors import SimmerError
+from simmer.errors import BusClosed, SimmerError
 from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
-from simmer.transport.bus import BusClosed, CommandBus
+from simmer.transport.bus import CommandBus
 
 log = logging.getLogger("simmer.transport")
 

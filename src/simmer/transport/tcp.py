@@ -36,6 +36,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
+from simmer.errors import BusClosed
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 from simmer.protocol import (
     CLOCK_PREFIX,
@@ -54,7 +55,7 @@ from simmer.protocol import (
     frame_text,
     printable,
 )
-from simmer.transport.bus import BusClosed, CommandBus, Reply, Request
+from simmer.transport.bus import CommandBus, Reply, Request
 
 log = logging.getLogger("simmer.transport")
 
