@@ -45,6 +45,11 @@ def two_port_raw(link: Transports, message: bytes) -> bytes:
     """The original clients' way: send on port_rx and close, then read port_tx to the end."""
     with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
         out.sendall(message)
+    return two_port_collect(link)
+
+
+def two_port_collect(link: Transports) -> bytes:
+    """Connect to port_tx and read what it sends, to the end."""
     data = b""
     with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
         while chunk := back.recv(1024):
@@ -52,10 +57,15 @@ def two_port_raw(link: Transports, message: bytes) -> bytes:
     return data
 
 
+def unpack(data: bytes, width: int = 4) -> list[float]:
+    """Packed replies as floats of ``width`` bytes."""
+    code = "<f" if width == 4 else "<d"
+    return [value for (value,) in struct.iter_unpack(code, data)]
+
+
 def two_port_send(link: Transports, message: bytes, width: int = 4) -> list[float]:
     """:func:`two_port_raw`, the reply unpacked as floats of ``width`` bytes."""
-    code = "<f" if width == 4 else "<d"
-    return [value for (value,) in struct.iter_unpack(code, two_port_raw(link, message))]
+    return unpack(two_port_raw(link, message), width)
 
 
 def read_frame(sock: socket.socket) -> list[float]:

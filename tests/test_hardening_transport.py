@@ -17,7 +17,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -41,20 +41,9 @@ from simmer.transport.bus import Reply
 from simmer.transport.tcp import MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
 from simmer.world import Simulation
 
-from helpers import default_data, make_config, make_sim
+from helpers import default_data, make_config, make_sim, wait_for
 
 pytestmark = pytest.mark.timeout(60)
-DEADLINE = 20.0
-"""Seconds any wait for an event may take before the test fails (far beyond what it needs)."""
-
-
-def wait_for(condition: Callable[[], bool], what: str, deadline: float = DEADLINE) -> None:
-    """Poll ``condition`` until true; fail after ``deadline`` s."""
-    end = time.monotonic() + deadline
-    while not condition():
-        if time.monotonic() > end:
-            pytest.fail(f"timed out waiting for {what}")
-        time.sleep(0.01)
 
 
 def stream(port: int) -> socket.socket:
@@ -473,9 +462,8 @@ def _send_until(sock: socket.socket, stop: threading.Event) -> None:
 
 def _sample(bus: CommandBus, stop: threading.Event, most: list[int]) -> None:
     """Record the most requests ever seen waiting on ``bus``."""
-    while not stop.is_set():
+    while not stop.wait(0.0005):  # a sample every half millisecond until stopped
         most[0] = max(most[0], bus.queued)
-        time.sleep(0.0005)
 
 
 # --------------------------------------------------------------------------- 6. signals, links

@@ -224,6 +224,8 @@ class _Server:
         self.idle_timeout = idle_timeout
         """Seconds a connection may sit between messages (None: no limit)."""
         self.order = itertools.count()
+        self.accepted = 0
+        """Connections accepted and started so far (what a test waits on)."""
         self._lock = threading.Lock()
         self._connections: set[_Connection] = set()
         self._listeners: list[socket.socket] = []
@@ -285,6 +287,7 @@ class _Server:
         with self._lock:
             self._connections.add(connection)
         connection.guard(connection.start)
+        self.accepted += 1
         return True
 
     def _pause(self, index: int, exc: Exception) -> None:
