@@ -22,14 +22,18 @@ def serving(
     speed: float | None = 1.0,
     serial: bool = False,
     serial_link: Path | None = None,
+    silence: float | None = None,
 ) -> Iterator[tuple[Runner, Transports]]:
     """Run a simulation (default: the built-in one) in a loop thread, serving every transport
-    on free ports; everything is stopped and closed on exit."""
+    on free ports (``silence``: the serial port's, if not the Arduino's); everything is stopped
+    and closed on exit."""
     sim = sim if sim is not None else Simulation.from_config()
     runner = Runner(sim, speed=speed)
     stop = threading.Event()
     options = RunOptions.free_ports(serial=serial, serial_link=serial_link)
     link = Transports(runner.bus, sim.config, options)
+    if link.serial is not None and silence is not None:
+        link.serial.silence = silence
     thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     with link:
         thread.start()
