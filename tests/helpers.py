@@ -106,8 +106,14 @@ def wait_for(condition: Callable[[], object], what: str, deadline: float = DEADL
     """Poll ``condition`` until it is true; fail naming ``what`` after ``deadline`` s. The one
     way a test waits for something another thread or process does."""
     end = time.monotonic() + deadline
-    pause = threading.Event()  # never set: its wait is the pause between two looks
     while not condition():
         if time.monotonic() > end:
             pytest.fail(f"still waiting for {what} after {deadline:g} s")
-        pause.wait(POLL)
+        let_time_pass(POLL)
+
+
+def let_time_pass(seconds: float) -> None:
+    """Let ``seconds`` of wall time go by where the behaviour under test is about time passing
+    (a server's back-off); never to wait for a result, and never before an assertion on how
+    long something took."""
+    threading.Event().wait(seconds)  # never set: the wait is the pause

@@ -38,10 +38,10 @@ from simmer.protocol import (
 from simmer.runner import LOG_LINES_PER_SECOND, Runner
 from simmer.transport import CommandBus, SerialServer, StreamServer
 from simmer.transport.bus import Reply
-from simmer.transport.tcp import MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
+from simmer.transport.tcp import ACCEPT_BACKOFF, MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE
 from simmer.world import Simulation
 
-from helpers import default_data, make_config, make_sim, wait_for
+from helpers import default_data, let_time_pass, make_config, make_sim, wait_for
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -378,7 +378,7 @@ def test_out_of_descriptors_backs_off_logs_once_and_recovers(tmp_path: Path) -> 
                 for _ in range(30):  # a connection already open is served meanwhile
                     early.sendall(b"u1\n")
                     assert read_frame(early) == [pytest.approx(3.5)]
-                    time.sleep(0.05)  # let several back-off periods go by
+                    let_time_pass(ACCEPT_BACKOFF / 10)  # 30 of them: three back-off periods
             finally:
                 for sock in flood:
                     sock.close()

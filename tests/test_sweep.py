@@ -10,7 +10,6 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +36,7 @@ from simmer.sweep import (
 from simmer.sweep.spec import OUTCOME_FIELDS
 from simmer.world.replay import replay
 
-from helpers import EXAMPLES, REPO, SIMMER_PY
+from helpers import EXAMPLES, REPO, SIMMER_PY, wait_for
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -548,11 +547,12 @@ def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
     )
-    deadline = time.monotonic() + 60
-    while not (table.exists() and len(table.read_text(encoding="utf-8").splitlines()) > 3):
-        assert time.monotonic() < deadline
+
+    def three_rows() -> bool:
         assert stopped.poll() is None
-        time.sleep(0.05)
+        return table.exists() and len(table.read_text(encoding="utf-8").splitlines()) > 3
+
+    wait_for(three_rows, "three rows of results", 60)
     os.killpg(stopped.pid, signal.SIGINT)
     _, err = stopped.communicate(timeout=60)
     assert stopped.returncode == 130, err
