@@ -14,6 +14,9 @@ from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.world import Simulation
 
+LONG_SILENCE = 60.0
+"""A serial port's silence (s) that a test's pause is certain to be shorter than."""
+
 
 @contextmanager
 def serving(

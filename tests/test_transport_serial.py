@@ -10,13 +10,11 @@ from pathlib import Path
 import pytest
 import serial
 
-from link_support import serving
+from link_support import LONG_SILENCE, serving
 
 from helpers import wait_for
 
 pytestmark = pytest.mark.timeout(60)
-LONG = 60.0
-"""Seconds of silence that end a command, where a test's pause must be certain to be shorter."""
 U0 = 39.5
 """The built-in simulation's ``u0`` reading at the start."""
 
@@ -42,7 +40,7 @@ def test_newline_ends_a_command_and_replies_are_packed_floats(tmp_path: Path) ->
 def test_one_command_split_across_two_writes_a_pause_apart() -> None:
     """The server has read the first half before the second comes, in a pause far shorter
     than the silence that would end the command."""
-    with serving(serial=True, silence=LONG) as (_, link):
+    with serving(serial=True, silence=LONG_SILENCE) as (_, link):
         assert link.serial is not None
         with serial.Serial(link.serial.path, 9600, timeout=5) as port:
             port.write(b"u")
