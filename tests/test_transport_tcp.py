@@ -24,7 +24,7 @@ pytestmark = pytest.mark.timeout(60)
 INF = math.inf
 
 
-def received(link: Transports, data: bytes) -> bool:
+def partly_received(link: Transports, data: bytes) -> bool:
     """Whether a stream connection holds ``data``, the start of a message (in the loop's
     hands, not the kernel's)."""
     return any(c.inbox == data for c in list(link.stream._connections))
@@ -114,7 +114,7 @@ def test_stream_protocol_answers_many_messages_on_one_connection() -> None:
         assert read_frame(sock)[1] == pytest.approx(3.5)
         assert read_frame(sock) == [INF]
         sock.sendall(b"w0")
-        wait_for(lambda: received(link, b"w0"), "the first half")
+        wait_for(lambda: partly_received(link, b"w0"), "the first half")
         sock.sendall(b"-6\r\n")  # one message over two writes
         assert is_nan(read_frame(sock))  # busy
 
@@ -156,13 +156,14 @@ def test_two_clients_interleaving_each_get_their_own_replies() -> None:
 
 def still_open(sock: socket.socket) -> bool:
     """True while the server has neither closed ``sock`` nor sent it anything."""
+    timeout = sock.gettimeout()
     sock.setblocking(False)
     try:
         sock.recv(1)
     except BlockingIOError:
         return True
     finally:
-        sock.setblocking(True)
+        sock.settimeout(timeout)
     return False
 
 
