@@ -19,6 +19,7 @@ SUITES = [
     "bench_window",
     "bench_sweep",
     "bench_localization",
+    "bench_limits",
 ]
 
 

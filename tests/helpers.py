@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import copy
+import threading
+import time
 import tomllib
+from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 from simmer import SimConfig, Simulation
 from simmer.config import config_from_dict
@@ -88,3 +93,27 @@ def run_sequence(sim: Simulation, sequence: list[str]) -> None:
     for message in sequence:
         assert sim.command(message) == [float("inf")], message
         assert sim.run_until_idle(max_seconds=60)
+
+
+DEADLINE = 20.0
+"""Seconds any wait for an event may take before the test fails (far beyond what it needs: the
+machine is shared, and a test never asserts on how long something took)."""
+POLL = 0.005
+"""Seconds between two looks at a condition :func:`wait_for` polls."""
+
+
+def wait_for(condition: Callable[[], object], what: str, deadline: float = DEADLINE) -> None:
+    """Poll ``condition`` until it is true; fail naming ``what`` after ``deadline`` s. The one
+    way a test waits for something another thread or process does."""
+    end = time.monotonic() + deadline
+    while not condition():
+        if time.monotonic() > end:
+            pytest.fail(f"still waiting for {what} after {deadline:g} s")
+        let_time_pass(POLL)
+
+
+def let_time_pass(seconds: float) -> None:
+    """Let ``seconds`` of wall time go by where the behaviour under test is about time passing
+    (a server's back-off); never to wait for a result, and never before an assertion on how
+    long something took."""
+    threading.Event().wait(seconds)  # never set: the wait is the pause

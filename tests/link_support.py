@@ -14,6 +14,9 @@ from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.world import Simulation
 
+LONG_SILENCE = 60.0
+"""A serial port's silence (s) that a test's pause is certain to be shorter than."""
+
 
 @contextmanager
 def serving(
@@ -22,14 +25,18 @@ def serving(
     speed: float | None = 1.0,
     serial: bool = False,
     serial_link: Path | None = None,
+    silence: float | None = None,
 ) -> Iterator[tuple[Runner, Transports]]:
     """Run a simulation (default: the built-in one) in a loop thread, serving every transport
-    on free ports; everything is stopped and closed on exit."""
+    on free ports (``silence``: the serial port's, if not the Arduino's); everything is stopped
+    and closed on exit."""
     sim = sim if sim is not None else Simulation.from_config()
     runner = Runner(sim, speed=speed)
     stop = threading.Event()
     options = RunOptions.free_ports(serial=serial, serial_link=serial_link)
     link = Transports(runner.bus, sim.config, options)
+    if link.serial is not None and silence is not None:
+        link.serial.silence = silence
     thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
     with link:
         thread.start()
@@ -45,6 +52,11 @@ def two_port_raw(link: Transports, message: bytes) -> bytes:
     """The original clients' way: send on port_rx and close, then read port_tx to the end."""
     with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
         out.sendall(message)
+    return two_port_collect(link)
+
+
+def two_port_collect(link: Transports) -> bytes:
+    """Connect to port_tx and read what it sends, to the end."""
     data = b""
     with socket.create_connection(("127.0.0.1", link.two_port.port_tx), timeout=10) as back:
         while chunk := back.recv(1024):
@@ -52,10 +64,15 @@ def two_port_raw(link: Transports, message: bytes) -> bytes:
     return data
 
 
+def unpack(data: bytes, width: int = 4) -> list[float]:
+    """Packed replies as floats of ``width`` bytes."""
+    code = "<f" if width == 4 else "<d"
+    return [value for (value,) in struct.iter_unpack(code, data)]
+
+
 def two_port_send(link: Transports, message: bytes, width: int = 4) -> list[float]:
     """:func:`two_port_raw`, the reply unpacked as floats of ``width`` bytes."""
-    code = "<f" if width == 4 else "<d"
-    return [value for (value,) in struct.iter_unpack(code, two_port_raw(link, message))]
+    return unpack(two_port_raw(link, message), width)
 
 
 def read_frame(sock: socket.socket) -> list[float]:

@@ -26,8 +26,9 @@ from typer.testing import CliRunner
 
 from simmer import Simulation
 from simmer.cli import app
+from simmer.errors import SweepError
 from simmer.record import RunRecorder
-from simmer.sweep import SweepError, sweep_from_dict
+from simmer.sweep import sweep_from_dict
 from simmer.sweep.spec import KNOWN_KEYS, MAX_RUNS, load_sweep
 
 from helpers import EXAMPLES, drive_noisily, noisy_config

@@ -14,7 +14,7 @@ import struct
 import pytest
 import serial
 
-from link_support import read_frame, serving
+from link_support import LONG_SILENCE, read_frame, serving
 from simmer.protocol import EXPLAIN, MAX_COMMANDS, MAX_MESSAGE_BYTES
 from simmer.transport import Transports
 
@@ -141,20 +141,17 @@ def test_fuzz_two_port_scheme() -> None:
 
 def test_fuzz_serial_port() -> None:
     rng = random.Random(SEED + 2)
-    with serving(speed=None, serial=True) as (_, link):
+    with serving(speed=None, serial=True, silence=LONG_SILENCE) as (_, link):
         assert link.serial is not None
         with serial.Serial(link.serial.path, 9600, timeout=10) as port:
             for _ in range(MESSAGES):
-                # A message the port reads as one: no newline and short enough to arrive at
-                # once (a pause of 50 ms ends a command, as on the Arduino).
+                # A message the port reads as one: no newline inside, and no pause in it
+                # however the pseudo-terminal hands it over (the silence is long).
                 data = message(rng, line=True, most=4096)
                 port.write(data + b"\n")
                 expected = replies_expected(data)
                 reply = port.read(4 * expected)
                 assert len(reply) == 4 * expected, data[:80]
-            port.timeout = 0.2
-            assert port.read(4) == b""  # nothing extra
-            port.timeout = 10
-            port.write(b"u1\n")
-            assert floats(port.read(4)) == [pytest.approx(3.5)]
+            port.write(b"u1,u1,u1\n")
+            assert floats(port.read(12)) == [pytest.approx(3.5)] * 3  # nothing extra before
         good_client_served(link)

@@ -15,9 +15,9 @@ from typer.testing import CliRunner
 
 from simmer.cli import app
 from simmer.config import load_config
+from simmer.errors import PlotError
 from simmer.record.plots import (
     PATH_COLOR,
-    PlotError,
     plot_run,
     read_run,
     sensor_panels,

@@ -17,11 +17,12 @@ from PIL import Image
 
 from simmer import Simulation
 from simmer.colors import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
+from simmer.errors import SweepError
 from simmer.options import RunOptions
 from simmer.record.plots import plot_run
 from simmer.record.runfolder import load_run, retrace
 from simmer.serve import serve
-from simmer.sweep.spec import SweepError, load_sweep, sweep_from_dict
+from simmer.sweep.spec import load_sweep, sweep_from_dict
 from simmer.sweep.success import success_condition
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.world.events import CommandEvent, Event

@@ -11,7 +11,6 @@ import logging
 import math
 import socket
 import struct
-import time
 from pathlib import Path
 
 import pytest
@@ -24,7 +23,7 @@ from simmer.config import load_config
 from simmer.console import run_console
 from simmer.protocol import FramedCodec, framed_value, parse_command, unwrap_frames
 
-from helpers import SIMMER_PY, default_data, make_config
+from helpers import SIMMER_PY, default_data, make_config, wait_for
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -192,7 +191,7 @@ def test_the_persistent_protocol_keeps_its_packed_frames_in_framed_mode() -> Non
 
 
 def test_v12_program_over_the_serial_port_reads_frames_until_the_end_character() -> None:
-    with serving(framed_sim(), serial=True) as (_, link):
+    with serving(framed_sim(), serial=True, silence=0.0) as (_, link):
         assert link.serial is not None
         with serial.Serial(link.serial.path, 9600, timeout=5) as port:
             port.write(b"[u0]")
@@ -202,13 +201,14 @@ def test_v12_program_over_the_serial_port_reads_frames_until_the_end_character()
             port.write(b"noise\n[zz][xx]")  # the robot reads until ']': two messages
             assert port.read_until(b"]") == b"[zz:Not Found]"
             assert port.read_until(b"]") == b"[xx:DRIVE STOP]"
-            port.write(b"[w0:")  # a frame split across two writes, 60 ms apart
+            read = link.serial.received
+            port.write(b"[w0:")  # a frame split across two writes, past the silence (none)
             port.flush()
-            time.sleep(0.06)
+            wait_for(lambda: link.serial is not None and link.serial.received == read + 4, "[w0:")
             port.write(b"6]")
             assert port.read_until(b"]") == b"[w0:True]"
-            port.timeout = 0.3
-            assert port.read(1) == b""  # exactly one reply each
+            port.write(b"[u1]")
+            assert port.read_until(b"]") == b"[u1:3.5]"  # exactly one reply each before it
 
 
 def test_the_client_library_speaks_framed_serial() -> None:

@@ -13,7 +13,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -51,7 +50,7 @@ from simmer.world.events import (
 )
 from simmer.world.replay import replay
 
-from helpers import EXAMPLES, LAB_SEQUENCE, SIMMER_PY, drive_noisily, noisy_config
+from helpers import EXAMPLES, LAB_SEQUENCE, SIMMER_PY, drive_noisily, noisy_config, wait_for
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -330,14 +329,12 @@ def test_a_run_killed_with_sigkill_leaves_events_whose_every_line_parses(tmp_pat
         command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env
     )
     events = folder / "events.jsonl"
-    deadline = time.monotonic() + 60
     try:
-        while time.monotonic() < deadline:
-            if events.exists() and events.read_bytes().count(b"\n") >= 2000:
-                break
-            time.sleep(0.05)
-        else:
-            pytest.fail("the recorded run wrote fewer than 2000 events in 60 s")
+        wait_for(
+            lambda: events.exists() and events.read_bytes().count(b"\n") >= 2000,
+            "the recorded run to write 2000 events",
+            60,
+        )
         os.kill(process.pid, signal.SIGKILL)
     finally:
         process.kill()

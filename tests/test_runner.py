@@ -8,10 +8,10 @@ import threading
 import pytest
 
 from link_support import serving
-from simmer.errors import WrongThread
+from simmer.errors import BusClosed, WrongThread
 from simmer.protocol import Decoded
 from simmer.runner import Runner
-from simmer.transport import BusClosed, CommandBus
+from simmer.transport import CommandBus
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event
 

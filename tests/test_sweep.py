@@ -10,7 +10,6 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +17,11 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
+from simmer.errors import SweepError
 from simmer.record.runfolder import load_run
 from simmer.sweep import (
     RunResult,
     RunSpec,
-    SweepError,
     SweepSpec,
     apply_overrides,
     build_config,
@@ -37,7 +36,7 @@ from simmer.sweep import (
 from simmer.sweep.spec import OUTCOME_FIELDS
 from simmer.world.replay import replay
 
-from helpers import EXAMPLES, REPO, SIMMER_PY
+from helpers import EXAMPLES, REPO, SIMMER_PY, wait_for
 
 pytestmark = pytest.mark.timeout(300)
 
@@ -381,7 +380,8 @@ def test_a_hanging_program_is_stopped_at_the_wall_limit(tmp_path: Path) -> None:
     rows = read_table(tmp_path / "out" / "results.csv")
     assert done.ran == 2
     assert [row["status"] for row in rows] == ["timeout", "timeout"]
-    assert all(1.4 < float(row["wall_time"]) < 10 for row in rows)
+    assert all(float(row["wall_time"]) > 1.4 for row in rows)  # not before its limit
+    # how soon after: benchmarks/bench_limits.py
 
 
 def test_minimal_sweep_file_through_the_cli(tmp_path: Path) -> None:
@@ -530,7 +530,7 @@ def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
     thread.join(timeout=30)
     assert not thread.is_alive()
     assert results[0].status == "timeout"
-    assert 0.4 < results[0].wall_time < 5
+    assert results[0].wall_time > 0.4  # not before its limit; how soon after: bench_limits.py
 
 
 def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
@@ -548,11 +548,12 @@ def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
     )
-    deadline = time.monotonic() + 60
-    while not (table.exists() and len(table.read_text(encoding="utf-8").splitlines()) > 3):
-        assert time.monotonic() < deadline
+
+    def three_rows() -> bool:
         assert stopped.poll() is None
-        time.sleep(0.05)
+        return table.exists() and len(table.read_text(encoding="utf-8").splitlines()) > 3
+
+    wait_for(three_rows, "three rows of results", 60)
     os.killpg(stopped.pid, signal.SIGINT)
     _, err = stopped.communicate(timeout=60)
     assert stopped.returncode == 130, err

@@ -11,10 +11,11 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
+from simmer.errors import SweepError
 from simmer.sweep import load_sweep
 from simmer.sweep.results import ResultsFile
 from simmer.sweep.runs import STDERR_TAIL, RunSpec, execute
-from simmer.sweep.spec import MAX_RUNS, SweepError
+from simmer.sweep.spec import MAX_RUNS
 
 from helpers import EXAMPLES
 

@@ -10,18 +10,20 @@ import os
 import signal
 import subprocess
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from simmer.proctree import descendants
 
+from helpers import wait_for
+
 pytestmark = [
     pytest.mark.timeout(240),
     pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc"),
 ]
+STARTING = 90.0
+"""Seconds a sweep's processes may take to start or to go (sweep workers import a lot)."""
 
 SIMMER = Path(sys.executable).with_name("simmer")
 PROGRAM = """\
@@ -48,15 +50,6 @@ program = "python program.py"
 seeds = 4
 wall_seconds = 600
 """
-
-
-def wait_for(condition: Callable[[], bool], what: str, bound: float = 90.0) -> None:
-    """Wait until ``condition`` holds, at most ``bound`` wall seconds."""
-    deadline = time.monotonic() + bound
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"still waiting for {what} after {bound:g} s")
-        time.sleep(0.05)
 
 
 def alive(pid: int) -> bool:
@@ -109,15 +102,17 @@ def start_sweep(folder: Path, *extra: str) -> subprocess.Popen[str]:
 def running_sweep(folder: Path) -> tuple[subprocess.Popen[str], set[int]]:
     """A sweep with two runs finished and two programs looping; it and every process below."""
     sweep = start_sweep(folder)
-    wait_for(lambda: len(pids(folder, "program")) == 4, "four programs")
-    wait_for(lambda: len(pids(folder, "child")) == 4, "their children")
+    wait_for(lambda: len(pids(folder, "program")) == 4, "four programs", STARTING)
+    wait_for(lambda: len(pids(folder, "child")) == 4, "their children", STARTING)
     below = descendants(sweep.pid)
     assert len(below) >= 4  # two workers, two programs (and the resource tracker)
     return sweep, below | set(pids(folder, "child")) | set(pids(folder, "program"))
 
 
 def assert_all_gone(sweep: subprocess.Popen[str], below: set[int], folder: Path) -> None:
-    wait_for(lambda: not any(alive(pid) for pid in below), "every process of the sweep to go")
+    wait_for(
+        lambda: not any(alive(pid) for pid in below), "every process of the sweep to go", STARTING
+    )
     assert not in_group(sweep.pid)  # by process group: the sweep's own group is empty
     assert not descendants(sweep.pid)  # by parent: nothing below it
     assert not any(alive(pid) for pid in pids(folder, "child"))  # the detached children too

@@ -6,22 +6,28 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import select
 import socket
 import struct
 import threading
-import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from link_support import read_frame, serving, two_port_send
+from link_support import read_frame, serving, two_port_collect, two_port_send, unpack
 from simmer.protocol import MAX_MESSAGE_BYTES
 from simmer.transport import Transports
 
-from helpers import LAB_SEQUENCE, default_data, make_sim
+from helpers import DEADLINE, LAB_SEQUENCE, default_data, make_sim, wait_for
 
 pytestmark = pytest.mark.timeout(60)
 INF = math.inf
+
+
+def partly_received(link: Transports, data: bytes) -> bool:
+    """Whether a stream connection holds ``data``, the start of a message (in the loop's
+    hands, not the kernel's)."""
+    return any(c.inbox == data for c in list(link.stream._connections))
 
 
 def is_nan(values: list[float]) -> bool:
@@ -35,8 +41,7 @@ def stream(link_port: int) -> socket.socket:
 
 
 def wait_idle_two_port(link: Transports, width: int) -> None:
-    while not math.isinf(two_port_send(link, b"w0-0", width)[0]):
-        time.sleep(0.005)
+    wait_for(lambda: math.isinf(two_port_send(link, b"w0-0", width)[0]), "the drive to end")
 
 
 @pytest.mark.parametrize("width", [4, 8])
@@ -86,10 +91,11 @@ def test_two_port_oversize_message_gets_one_nan() -> None:
         assert two_port_send(link, b"u0")[0] > 0
 
 
-def test_two_port_silent_connection_is_no_message() -> None:
+def test_two_port_silent_connection_is_no_message(caplog: pytest.LogCaptureFixture) -> None:
+    caplog.set_level(logging.DEBUG, logger="simmer.transport")
     with serving() as (_, link):
         socket.create_connection(("127.0.0.1", link.two_port.port_rx)).close()
-        time.sleep(0.05)
+        wait_for(lambda: "sent nothing: no message" in caplog.text, "the silent connection")
         assert two_port_send(link, b"u0,u1")[1] == pytest.approx(3.5)
 
 
@@ -97,7 +103,7 @@ def test_two_port_reply_kept_when_reply_client_leaves_early() -> None:
     with serving(speed=None) as (_, link):
         early = socket.create_connection(("127.0.0.1", link.two_port.port_tx))
         early.close()  # leaves before any message: must not swallow the next reply
-        time.sleep(0.1)
+        wait_for(lambda: link.two_port.accepted == 1, "the early reply connection")
         assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
         assert two_port_send(link, b"u0,u1")[1] == pytest.approx(3.5)
 
@@ -108,7 +114,7 @@ def test_stream_protocol_answers_many_messages_on_one_connection() -> None:
         assert read_frame(sock)[1] == pytest.approx(3.5)
         assert read_frame(sock) == [INF]
         sock.sendall(b"w0")
-        time.sleep(0.02)
+        wait_for(lambda: partly_received(link, b"w0"), "the first half")
         sock.sendall(b"-6\r\n")  # one message over two writes
         assert is_nan(read_frame(sock))  # busy
 
@@ -148,20 +154,41 @@ def test_two_clients_interleaving_each_get_their_own_replies() -> None:
             assert two_port_send(link, b"u1,u1") == [pytest.approx(3.5)] * 2
 
 
-def test_idle_client_for_10_s_does_not_hold_up_others() -> None:
+def still_open(sock: socket.socket) -> bool:
+    """True while the server has neither closed ``sock`` nor sent it anything."""
+    timeout = sock.gettimeout()
+    sock.setblocking(False)
+    try:
+        sock.recv(1)
+    except BlockingIOError:
+        return True
+    finally:
+        sock.settimeout(timeout)
+    return False
+
+
+def test_idle_clients_do_not_hold_up_others() -> None:
+    """Two clients connect and say nothing (the original server waited on them forever) while
+    others come and go; both stay connected throughout, and are served when they speak."""
     with serving() as (_, link):
         idle_stream = stream(link.stream.port)
         idle_rx = socket.create_connection(("127.0.0.1", link.two_port.port_rx))
+        wait_for(lambda: link.stream.accepted == 1, "the idle stream client")
         served = 0
-        deadline = time.monotonic() + 10.0
         try:
-            while time.monotonic() < deadline:
+            for _ in range(11):
                 with stream(link.stream.port) as sock:
                     sock.sendall(b"u1\n")
                     assert read_frame(sock) == [pytest.approx(3.5)]
                 assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
                 served += 1
-                time.sleep(0.05)
+            assert still_open(idle_stream)
+            assert still_open(idle_rx)
+            idle_stream.sendall(b"u1\n")
+            assert read_frame(idle_stream) == [pytest.approx(3.5)]
+            idle_rx.sendall(b"u0,u1")
+            idle_rx.close()
+            assert unpack(two_port_collect(link))[1] == pytest.approx(3.5)
         finally:
             idle_stream.close()
             idle_rx.close()
@@ -206,7 +233,7 @@ def test_stream_client_that_sends_much_before_reading_gets_every_reply_in_order(
     with serving() as (_, link), stream(link.stream.port) as sock:
         sender = threading.Thread(target=sock.sendall, args=(b"u1\nu0,u1\n" * (count // 2),))
         sender.start()  # replies pile up while the client is still writing: back-pressure
-        time.sleep(0.2)
+        assert select.select([sock], [], [], DEADLINE)[0] == [sock]  # the first has come
         replies = [read_frame(sock) for _ in range(count)]
         sender.join()
     assert [len(r) for r in replies[:4]] == [1, 2, 1, 2]

@@ -12,7 +12,6 @@ import logging
 import math
 import os
 import threading
-import time
 from collections.abc import Callable, Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -36,6 +35,8 @@ from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
 from simmer.ui.render import RecordingRenderer
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
+
+from helpers import wait_for
 
 TIMEOUT = 30.0
 """Generous seconds for anything another thread must do (never a speed assertion)."""
@@ -483,9 +484,7 @@ def test_window_and_control_programs_share_one_simulation() -> None:
         try:
             with connect(port=port) as client:
                 replies.append(client.send("u0,u1"))
-                deadline = time.monotonic() + TIMEOUT
-                while not bridge.latest.clients and time.monotonic() < deadline:
-                    time.sleep(0.01)
+                wait_for(lambda: bridge.latest.clients, "the window to show the client", TIMEOUT)
                 clients_seen.extend(bridge.latest.clients or ())
         except BaseException as exc:
             errors.append(exc)

@@ -4,6 +4,7 @@ reading the files back with PyAV and Pillow."""
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import resource
@@ -21,6 +22,7 @@ import pytest
 from PIL import Image
 
 from simmer import Simulation
+from simmer.client import connect
 from simmer.geometry import Pose
 from simmer.ui import Bridge, Window
 from simmer.ui.hud import ALARM, HELP, paint_hud
@@ -31,6 +33,8 @@ from simmer.ui.video import VideoRecorder
 from simmer.view.frames import FrameClock, check_video_path
 from simmer.view.snapshot import StaticScene
 from simmer.world.events import StepEvent
+
+from helpers import wait_for
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -344,9 +348,13 @@ def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:
     try:
         assert process.stdout is not None
         for line in process.stdout:
+            if line.startswith("persistent TCP"):
+                port = int(line.split(" port ")[1].split()[0])
             if line.startswith("running headless"):
                 break
-        time.sleep(1.0)
+        with connect(port=port) as robot:  # half a simulated second or more: 3 in at 6 in/s
+            assert robot.send("w0-3") == [math.inf]
+            wait_for(lambda: robot.send("w0-0") == [math.inf], "the drive to end")
         process.send_signal(signal.SIGINT)
         output, _ = process.communicate(timeout=30)
     finally:

@@ -16,7 +16,7 @@ from rich.console import Console
 from typer import _click  # the click typer ships: its Command is what a command overrides
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
-from simmer.errors import ConfigError
+from simmer.errors import ConfigError, ExitCalled
 from simmer.ports import STREAM_PORT
 
 if TYPE_CHECKING:
@@ -177,7 +177,8 @@ def new(
     """Make a folder of your own for Lab 1: the lab's rover (my_rover.toml), the example
     programs, two sweep files and a README pointing at the lab page, whose every command runs
     from this folder."""
-    from simmer.newfolder import FolderExists, lab_page, new_folder
+    from simmer.errors import FolderExists
+    from simmer.newfolder import lab_page, new_folder
 
     try:
         written = new_folder(folder)
@@ -221,10 +222,6 @@ def check(
         raise typer.Exit(1)
     out.print(f"[bold green]OK[/] {config}")
     out.print(summarize(loaded), markup=False)
-
-
-class ExitCalled(SystemExit):
-    """``os._exit`` called by a plug-in or a device while ``simmer check`` runs it."""
 
 
 @contextlib.contextmanager
@@ -845,7 +842,8 @@ def plot(folder: RunFolder) -> None:
     """Draw a recorded run into its folder: path.png (the path over the maze, commands
     numbered, collisions marked) and sensors.png (readings against time); report.md links
     them."""
-    from simmer.record.plots import PlotError, plot_run
+    from simmer.errors import PlotError
+    from simmer.record.plots import plot_run
 
     try:
         written = plot_run(folder)
@@ -1057,7 +1055,8 @@ def sweep(
 ) -> None:
     """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
     summary.md (success rate per setting with 95% intervals)."""
-    from simmer.sweep import SweepError, dask_engine, load_sweep, local_pool, run_sweep
+    from simmer.errors import SweepError
+    from simmer.sweep import dask_engine, load_sweep, local_pool, run_sweep
 
     try:
         spec = load_sweep(sweep_file)

@@ -1,13 +1,41 @@
-"""Every exception SimMeR raises on purpose, in one small tree.
+"""Every exception SimMeR raises on purpose, in one small tree (a test keeps them all here).
 
-Catch :class:`SimmerError` to catch them all. Each carries a message written for a
-student: what is wrong, where, and what to do about it.
+Catch :class:`SimmerError` to catch the errors. Each carries a message written for a
+student: what is wrong, where, and what to do about it. The four signals at the bottom are
+not errors: they stop a run or a check from inside and keep the base Python gives their
+meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterrupt``)::
+
+    SimmerError
+    ├── ConfigError            a configuration could not be loaded (every issue)
+    ├── WrongThread            a simulation driven from another thread
+    ├── DeviceKindError        a device kind registered twice, unknown or not honouring it
+    ├── CommandError           a command could not be carried out
+    ├── ClientError            raised by simmer.client
+    │   ├── ConnectionFailed
+    │   └── ReplyTimeout
+    ├── ReplayError            a run folder cannot be replayed or rendered
+    │   └── UntrustedRun       its plug-ins would run code
+    ├── PlotError              a run folder cannot be plotted
+    ├── BusClosed              the simulation loop has stopped
+    ├── SweepError + ValueError     a sweep file SimMeR cannot run
+    ├── ScenarioError + ValueError  a scenario setting that cannot be met
+    └── FolderExists + ValueError   ``simmer new`` would write over files
+
+    LimitReached (Exception)       a policy ran into its run's limit
+    └── WallLimitReached           the wall-clock limit, raised in the policy's thread
+    SweepStopped (KeyboardInterrupt)  a signal stopped the sweep
+    ExitCalled (SystemExit)           ``os._exit`` called while ``simmer check`` runs a plug-in
+
+The ``ValueError`` second base is kept for the code that raised them as value errors (a
+sweep setting, a scenario cell and a destination folder are values the user gave).
 """
 
 from __future__ import annotations
 
+import signal
 import sysconfig
 import traceback
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -72,6 +100,76 @@ class ReplyTimeout(ClientError):
 class ReplayError(SimmerError):
     """A run folder cannot be replayed or rendered (not a run folder, unreadable files, a
     configuration that no longer loads, a time outside the run)."""
+
+
+class UntrustedRun(ReplayError):
+    """A run folder's configuration names plug-ins, and re-simulating it would run their code."""
+
+    def __init__(self, plugins: Sequence[str], where: str = "") -> None:
+        self.plugins = list(plugins)
+        names = ", ".join(self.plugins)
+        super().__init__(
+            f"{where or 'the manifest'}: the run was recorded with plug-ins ({names}), and "
+            "re-simulating it runs their code: a run folder is data, so SimMeR does not, unless "
+            "asked. If you trust whoever made the folder, add --trust; or name your own copies "
+            "with --plugin FILE"
+        )
+
+
+class PlotError(SimmerError):
+    """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
+
+
+class BusClosed(SimmerError):
+    """The simulation loop has stopped; no more messages will be answered."""
+
+
+class SweepError(SimmerError, ValueError):
+    """The sweep file is not a sweep SimMeR can run (the message says why)."""
+
+
+class ScenarioError(SimmerError, ValueError):
+    """A scenario setting that cannot be met: a bad cell, zone name or place, by its key."""
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(f"{key}: {message}")
+        self.key = key
+        self.message = message
+
+
+class FolderExists(SimmerError, ValueError):
+    """The destination holds files already: nothing is written over them."""
+
+
+# ----------------------------------------------------------------------------- not errors
+
+
+class LimitReached(Exception):
+    """A policy ran into one of the run's limits (``seconds`` or ``timeout``)."""
+
+    def __init__(self, status: str) -> None:
+        super().__init__(status)
+        self.status = status
+
+
+class WallLimitReached(LimitReached):
+    """The wall-clock limit, raised in a thread from outside (so it takes no arguments)."""
+
+    def __init__(self) -> None:
+        super().__init__("timeout")
+
+
+class SweepStopped(KeyboardInterrupt):
+    """A signal stopped the sweep (as Ctrl-C does); ``signum`` and ``name`` say which."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        self.name = signal.Signals(signum).name
+        super().__init__(self.name)
+
+
+class ExitCalled(SystemExit):
+    """``os._exit`` called by a plug-in or a device while ``simmer check`` runs it."""
 
 
 # ----------------------------------------------------------------------------- user code

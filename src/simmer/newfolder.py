@@ -12,13 +12,10 @@ from importlib.resources import files
 from pathlib import Path
 
 import simmer
+from simmer.errors import FolderExists
 
 TEMPLATE = "data/new"
 LAB_PAGE = "docs/lab1.md"
-
-
-class FolderExists(ValueError):
-    """The destination holds files already: nothing is written over them."""
 
 
 def lab_page() -> str:

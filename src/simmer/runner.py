@@ -78,17 +78,18 @@ class _Wait:
 
 
 class _LogBudget:
-    """Log lines per client, at most :data:`LOG_LINES_PER_SECOND` a wall second; the rest
-    are counted and said in one line when that client's second is over."""
+    """Log lines per client, at most :data:`LOG_LINES_PER_SECOND` a second of ``clock`` (wall
+    time); the rest are counted and said in one line when that client's second is over."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
         self._spent: dict[str, tuple[float, int, int]] = {}  # second started, lines, held back
         self.holding = False
         """Whether some client's lines are held back (:meth:`flush` says how many)."""
 
     def flush(self) -> None:
         """Say how many lines were held back for each client whose second is over."""
-        now = time.monotonic()
+        now = self._clock()
         self.holding = False
         for who, (started, lines, held) in list(self._spent.items()):
             if not held:
@@ -103,7 +104,7 @@ class _LogBudget:
         """Log ``text % args`` about ``client`` (already printable) unless its budget is
         spent."""
         who = client.rsplit(":", 1)[0] if client.startswith(("two-port ", "stream ")) else client
-        now = time.monotonic()
+        now = self._clock()
         started, lines, held = self._spent.get(who, (now, 0, 0))
         if now - started >= 1.0:
             if held:

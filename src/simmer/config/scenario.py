@@ -18,6 +18,7 @@ from simmer.config.maze import Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.config.project import HEADINGS, Cell
 from simmer.config.zones import Zones
+from simmer.errors import ScenarioError
 from simmer.geometry import (
     Pose,
     place_polygon,
@@ -31,15 +32,6 @@ BLOCK_TRIES = 1000
 """Draws of a block place before giving up (a loading zone too small for the block)."""
 
 Streams = Callable[[str], np.random.Generator]
-
-
-class ScenarioError(ValueError):
-    """A scenario setting that cannot be met: a bad cell, zone name or place, by its key."""
-
-    def __init__(self, key: str, message: str) -> None:
-        super().__init__(f"{key}: {message}")
-        self.key = key
-        self.message = message
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ from simmer.config.models import (
 )
 from simmer.devices import device_kinds, get_device_kind
 from simmer.devices.plugins import import_plugin_file
-from simmer.errors import ConfigError, ConfigIssue, DeviceKindError
+from simmer.errors import ConfigError, ConfigIssue, DeviceKindError, ScenarioError
 from simmer.geometry import (
     FloatArray,
     Pose,
@@ -578,7 +578,7 @@ def check_project(settings: Settings) -> list[ConfigIssue]:
     """Zones on open cells of the maze, and a scenario that can be met (its start cell, block
     place and target zone), each mistake named by its key."""
     from simmer.config.maze import Maze
-    from simmer.config.scenario import ScenarioError, check_cell, draw_scenario
+    from simmer.config.scenario import check_cell, draw_scenario
     from simmer.config.zones import Zones
 
     maze = Maze.from_settings(settings)

@@ -43,7 +43,7 @@ from pydantic import ValidationError
 from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
-from simmer.errors import SimmerError
+from simmer.errors import PlotError
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
 from simmer.world.localization import (
     HEADING_TOLERANCE,
@@ -105,10 +105,6 @@ MAX_POSE_VALUE = 1e9
 """A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
 is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
 300 digits across the title."""
-
-
-class PlotError(SimmerError):
-    """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
 
 
 @dataclass(frozen=True)

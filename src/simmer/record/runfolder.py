@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 import simmer
 from simmer.config.models import SimConfig
 from simmer.config.validate import config_from_dict
-from simmer.errors import ReplayError
+from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
 from simmer.record.eventlog import (
@@ -199,20 +199,6 @@ def _is_file(entry: str | Path) -> bool:
     :func:`simmer.config.validate` tells them apart."""
     text = str(entry)
     return text.endswith(".py") or "/" in text or "\\" in text
-
-
-class UntrustedRun(ReplayError):
-    """A run folder's configuration names plug-ins, and re-simulating it would run their code."""
-
-    def __init__(self, plugins: Sequence[str], where: str = "") -> None:
-        self.plugins = list(plugins)
-        names = ", ".join(self.plugins)
-        super().__init__(
-            f"{where or 'the manifest'}: the run was recorded with plug-ins ({names}), and "
-            "re-simulating it runs their code: a run folder is data, so SimMeR does not, unless "
-            "asked. If you trust whoever made the folder, add --trust; or name your own copies "
-            "with --plugin FILE"
-        )
 
 
 def library_versions() -> dict[str, str]:

@@ -21,7 +21,7 @@ from simmer.sweep.runs import (
     execute,
 )
 from simmer.sweep.spec import Distribution, SweepSpec, load_sweep, sweep_from_dict
-from simmer.sweep.success import FAILURES, SweepError, failure_kind, success_condition
+from simmer.sweep.success import FAILURES, failure_kind, success_condition
 
 __all__ = [
     "FAILURES",
@@ -30,7 +30,6 @@ __all__ = [
     "Distribution",
     "RunResult",
     "RunSpec",
-    "SweepError",
     "SweepResult",
     "SweepSpec",
     "WarmSimulations",

@@ -44,6 +44,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from simmer.errors import SweepStopped
 from simmer.proctree import adopt_orphans, descendants, stop_strays
 from simmer.sweep.results import (
     ResultsFile,
@@ -89,15 +90,6 @@ PARENT_GRACE = 10.0
 it) before it stops what is left and exits."""
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 """Signals that stop a sweep cleanly (Ctrl-C, ``kill``, closing the terminal), where they exist."""
-
-
-class SweepStopped(KeyboardInterrupt):
-    """A signal stopped the sweep (as Ctrl-C does); ``signum`` and ``name`` say which."""
-
-    def __init__(self, signum: int) -> None:
-        self.signum = signum
-        self.name = signal.Signals(signum).name
-        super().__init__(self.name)
 
 
 def local_pool(workers: int | None = None) -> Engine:

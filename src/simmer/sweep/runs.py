@@ -35,6 +35,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any, Literal
 
 from simmer.config.models import SimConfig
+from simmer.errors import LimitReached, WallLimitReached
 from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
 
 if TYPE_CHECKING:
@@ -125,21 +126,6 @@ class RunResult:
     files: dict[str, bytes] = field(default_factory=dict, repr=False)
     """A kept run's folder (manifest.json, events.jsonl, trace.csv, report.json, report.md),
     for a failure with first.png and last.png; a filmed run's video.mp4."""
-
-
-class LimitReached(Exception):
-    """A policy ran into one of the run's limits (``seconds`` or ``timeout``)."""
-
-    def __init__(self, status: str) -> None:
-        super().__init__(status)
-        self.status = status
-
-
-class WallLimitReached(LimitReached):
-    """The wall-clock limit, raised in a thread from outside (so it takes no arguments)."""
-
-    def __init__(self) -> None:
-        super().__init__("timeout")
 
 
 def apply_overrides(data: dict[str, Any], overrides: tuple[tuple[str, Any], ...]) -> None:

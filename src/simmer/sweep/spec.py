@@ -47,19 +47,14 @@ from typing import Any, Literal, get_args
 
 import numpy as np
 
+from simmer.errors import SweepError
 from simmer.sweep.runs import ControllerKind, Keep, RunSpec
-from simmer.sweep.success import (
-    DEFAULT_SUCCESS,
-    OUTCOME_FIELDS,
-    SweepError,
-    success_condition,
-)
+from simmer.sweep.success import DEFAULT_SUCCESS, OUTCOME_FIELDS, success_condition
 
 __all__ = [
     "DEFAULT_SUCCESS",
     "OUTCOME_FIELDS",
     "Distribution",
-    "SweepError",
     "SweepSpec",
     "load_sweep",
     "success_condition",

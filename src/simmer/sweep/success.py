@@ -14,6 +14,8 @@ from collections.abc import Callable, Mapping
 from functools import lru_cache
 from typing import Any
 
+from simmer.errors import SweepError
+
 DEFAULT_SUCCESS = "reached and collisions == 0"
 LOCALIZATION_FIELDS = (
     "estimates",
@@ -80,10 +82,6 @@ MAX_EXPRESSION_CHARS = 1000
 anyone reads (and 200,000 ``not``s took gigabytes to parse)."""
 MAX_EXPRESSION_DEPTH = 32
 """Operators nested in a success condition (``not not x`` is 2 deep): evaluation recurses."""
-
-
-class SweepError(ValueError):
-    """The sweep file is not a sweep SimMeR can run (the message says why)."""
 
 
 def flat_outcome(outcome: Mapping[str, Any] | None) -> dict[str, Any]:

@@ -5,14 +5,13 @@ watched through the bus), while the serial port has a thread that only reads, de
 queues. :class:`Transports` starts the transports a run asks for."""
 
 from simmer.ports import STREAM_PORT
-from simmer.transport.bus import BusClosed, CommandBus, Request
+from simmer.transport.bus import CommandBus, Request
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
 from simmer.transport.transports import Transports, is_loopback
 
 __all__ = [
     "STREAM_PORT",
-    "BusClosed",
     "CommandBus",
     "Request",
     "SerialServer",

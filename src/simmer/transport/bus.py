@@ -33,7 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 
-from simmer.errors import SimmerError
+from simmer.errors import BusClosed
 from simmer.protocol import Decoded
 
 log = logging.getLogger("simmer.transport")
@@ -42,10 +42,6 @@ Watcher = Callable[[int], bool]
 """Called in the loop thread with the ready ``selectors`` events; return False to stop watching."""
 ErrorHandler = Callable[[Exception], None]
 """Called in the loop thread when a watcher raised (the socket is no longer watched)."""
-
-
-class BusClosed(SimmerError):
-    """The simulation loop has stopped; no more messages will be answered."""
 
 
 T = TypeVar("T")

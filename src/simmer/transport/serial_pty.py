@@ -24,9 +24,9 @@ import tty
 from dataclasses import replace
 from pathlib import Path
 
-from simmer.errors import SimmerError
+from simmer.errors import BusClosed, SimmerError
 from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
-from simmer.transport.bus import BusClosed, CommandBus
+from simmer.transport.bus import CommandBus
 
 log = logging.getLogger("simmer.transport")
 
@@ -36,7 +36,8 @@ SILENCE = 0.05
 
 class SerialServer:
     """Serve the bus over a pseudo-terminal; ``path`` is the device to open, ``link`` the
-    optional stable symlink to it."""
+    optional stable symlink to it, ``silence`` the seconds of quiet that end a packed command
+    (the Arduino's 50 ms; a test sets it long or short to make a pause certain)."""
 
     kind = "serial"
 
@@ -47,8 +48,12 @@ class SerialServer:
         *,
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
+        silence: float = SILENCE,
     ) -> None:
         self.bus = bus
+        self.silence = silence
+        self.received = 0
+        """Bytes read from the port so far (what a test waits on)."""
         self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
         codec = self.codec
         self._frame: tuple[bytes, bytes] | None = None
@@ -109,23 +114,25 @@ class SerialServer:
         try:
             while True:
                 waiting = buffer and silence
-                wait = max(0.0, last + SILENCE - time.monotonic()) if waiting else None
+                wait = max(0.0, last + self.silence - time.monotonic()) if waiting else None
                 readable, _, _ = select.select([self._master, self._wake_r], [], [], wait)
                 if self._wake_r in readable:
                     return
-                if not readable:  # 50 ms of silence: what we have is a command
+                if not readable:  # silence: what we have is a command
                     self._answer(bytes(buffer), len(buffer))
                     buffer.clear()
                     continue
                 try:
-                    buffer += os.read(self._master, 65536)
+                    chunk = os.read(self._master, 65536)
                 except BlockingIOError:
                     continue
+                buffer += chunk
                 last = time.monotonic()
                 self._split(buffer)
                 if len(buffer) > MAX_MESSAGE_BYTES:
                     self._answer(bytes(buffer), len(buffer))
                     buffer.clear()
+                self.received += len(chunk)  # counted once handled: a test waits on it
         except (BusClosed, OSError) as exc:
             if not self._stopping.is_set():
                 log.error("serial port %s stopped: %s", self.path, exc)

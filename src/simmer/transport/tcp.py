@@ -36,6 +36,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
+from simmer.errors import BusClosed
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 from simmer.protocol import (
     CLOCK_PREFIX,
@@ -54,7 +55,7 @@ from simmer.protocol import (
     frame_text,
     printable,
 )
-from simmer.transport.bus import BusClosed, CommandBus, Reply, Request
+from simmer.transport.bus import CommandBus, Reply, Request
 
 log = logging.getLogger("simmer.transport")
 
@@ -223,6 +224,8 @@ class _Server:
         self.idle_timeout = idle_timeout
         """Seconds a connection may sit between messages (None: no limit)."""
         self.order = itertools.count()
+        self.accepted = 0
+        """Connections accepted and started so far (what a test waits on)."""
         self._lock = threading.Lock()
         self._connections: set[_Connection] = set()
         self._listeners: list[socket.socket] = []
@@ -284,6 +287,7 @@ class _Server:
         with self._lock:
             self._connections.add(connection)
         connection.guard(connection.start)
+        self.accepted += 1
         return True
 
     def _pause(self, index: int, exc: Exception) -> None:
