@@ -5,12 +5,14 @@ from __future__ import annotations
 import socket
 import struct
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 from simmer.options import RunOptions
 from simmer.runner import Runner
+from simmer.serve import Served, serve
 from simmer.transport import Transports
 from simmer.world import Simulation
 
@@ -46,6 +48,19 @@ def serving(
             stop.set()
             thread.join()
             runner.bus.close()
+
+
+def run_program(
+    sim: Simulation,
+    command: str,
+    *,
+    echo: Callable[[str], None] = lambda _line: None,
+    **options: Any,
+) -> Served:
+    """``simmer run --headless --program COMMAND``: on free ports, the lockstep clock, as fast
+    as it goes, with a 120 s wall limit unless ``options`` say otherwise."""
+    settings = {"speed": None, "clock": "lockstep", "timeout": 120} | options
+    return serve(sim, RunOptions.free_ports(program=command, **settings), echo=echo)
 
 
 def two_port_raw(link: Transports, message: bytes) -> bytes:

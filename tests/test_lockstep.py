@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
+from link_support import run_program
 from simmer import Simulation
 from simmer.client import Client
 from simmer.lockstep import runs_python
-from simmer.options import RunOptions
 from simmer.runner import LocalLink
-from simmer.serve import Served, serve
+from simmer.serve import Served
 from simmer.world.events import CommandEvent, Event, StepEvent
 
 from helpers import EXAMPLES, REPO, noisy_config
@@ -54,13 +54,7 @@ class Fingerprint:
 
 def lockstep_run(sim: Simulation, program: str, speed: float | None, serial: bool) -> Served:
     """``simmer run --headless --program PROGRAM`` on free ports; the program must succeed."""
-    served = serve(
-        sim,
-        RunOptions.free_ports(
-            speed=speed, serial=serial, program=program, timeout=120, clock="lockstep"
-        ),
-        echo=lambda _line: None,
-    )
+    served = run_program(sim, program, speed=speed, serial=serial)
     assert served.ended_by == "program"
     assert served.exit_status == 0
     return served
@@ -173,12 +167,8 @@ def test_python_programs_are_recognised(command: str, python: bool) -> None:
 
 def test_a_program_that_is_not_python_is_told_so() -> None:
     said: list[str] = []
-    served = serve(
-        Simulation.from_config(),
-        RunOptions.free_ports(
-            speed=None, program="/bin/sh -c 'exit 0'", timeout=60, clock="lockstep"
-        ),
-        echo=said.append,
+    served = run_program(
+        Simulation.from_config(), "/bin/sh -c 'exit 0'", echo=said.append, timeout=60
     )
     assert served.exit_status == 0
     assert any("does not look like a Python program" in line for line in said), said

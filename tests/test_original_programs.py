@@ -23,10 +23,9 @@ from typing import Any
 
 import pytest
 
+from link_support import run_program
 from simmer import Simulation
-from simmer.options import RunOptions
 from simmer.record.eventlog import event_line
-from simmer.serve import serve
 from simmer.sweep import run_sweep, sweep_from_dict
 from simmer.world.events import CommandEvent, Event, RunEvent
 
@@ -63,16 +62,7 @@ def run_student_program(pattern: str, release: str, capfd: pytest.CaptureFixture
     """Run the program unchanged on the lockstep clock; what it printed and the event hash."""
     sim = Simulation(make_config(noisy_data() | RELEASES[release]), seed=11)
     events = EventHash(sim)
-    served = serve(
-        sim,
-        RunOptions.free_ports(
-            speed=None,
-            program=f"{sys.executable} {STUDENT} {pattern} {release}",
-            timeout=120,
-            clock="lockstep",
-        ),
-        echo=lambda _line: None,
-    )
+    served = run_program(sim, f"{sys.executable} {STUDENT} {pattern} {release}")
     printed = capfd.readouterr().out
     assert (served.ended_by, served.exit_status) == ("program", 0), printed
     assert printed.endswith("done\n")
@@ -97,16 +87,7 @@ def test_a_message_sent_before_a_sleep_is_taken_before_the_sleep(
     sim = Simulation(make_config(noisy_data()), seed=11)
     seen: list[Event] = []
     sim.add_observer(seen.append)
-    serve(
-        sim,
-        RunOptions.free_ports(
-            speed=None,
-            program=f"{sys.executable} {STUDENT} dead_reckoning 1.1",
-            timeout=120,
-            clock="lockstep",
-        ),
-        echo=lambda _line: None,
-    )
+    run_program(sim, f"{sys.executable} {STUDENT} dead_reckoning 1.1")
     capfd.readouterr()
     taken = [(e.step, e.message) for e in seen if isinstance(e, CommandEvent)]
     assert taken[:2] == [(0, "u0"), (7, "w0-12")]
@@ -127,13 +108,7 @@ def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
         encoding="utf-8",
     )
     sim = Simulation.from_config()
-    served = serve(
-        sim,
-        RunOptions.free_ports(
-            speed=None, program=f"{sys.executable} {program}", timeout=60, clock="lockstep"
-        ),
-        echo=lambda _line: None,
-    )
+    served = run_program(sim, f"{sys.executable} {program}", timeout=60)
     assert (served.ended_by, served.exit_status) == ("program", 0)
     assert "2 byte(s) the program wrote before 'sleep' never arrived" in caplog.text
     assert sim.time == pytest.approx(0.5, abs=sim.dt)

@@ -15,13 +15,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from link_support import run_program
 from simmer import Simulation
 from simmer.colors import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
 from simmer.errors import SweepError
-from simmer.options import RunOptions
 from simmer.record.plots import plot_run
 from simmer.record.runfolder import load_run, retrace
-from simmer.serve import serve
 from simmer.sweep.spec import load_sweep, sweep_from_dict
 from simmer.sweep.success import success_condition
 from simmer.ui.scene import ScenePainter, View, default_window_size
@@ -87,18 +86,7 @@ def test_bad_overrides_are_one_plain_line(flag: str, value: str, words: str) -> 
 def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     sim = Simulation.from_config(EXAMPLES / "project.toml", seed=21)
-    served = serve(
-        sim,
-        RunOptions.free_ports(
-            speed=None,
-            program=PROGRAM,
-            timeout=120,
-            record=folder,
-            answer=sim.scenario.target,
-            clock="lockstep",
-        ),
-        echo=lambda _line: None,
-    )
+    served = run_program(sim, PROGRAM, record=folder, answer=sim.scenario.target)
     assert served.ended_by == "program"
     assert served.exit_status == 0
     report = json.loads((folder / "report.json").read_text())
