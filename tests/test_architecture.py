@@ -15,7 +15,7 @@ import pytest
 SRC = Path(__file__).resolve().parent.parent / "src" / "simmer"
 
 LAYERS = [
-    {"pose", "ports", "errors", "protocol", "proctree", "colors"},
+    {"pose", "ports", "errors", "protocol", "proctree", "colors", "lazy"},
     {"geometry", "lockstep", "client"},
     {"devices", "console"},
     {"compat"},

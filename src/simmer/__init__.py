@@ -6,8 +6,9 @@ program does not load the simulator (NumPy, Numba, pydantic): a program pays onl
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from simmer.lazy import lazy_names
 
 __version__ = "2.0.0.dev0"
 
@@ -31,19 +32,7 @@ if TYPE_CHECKING:
     from simmer.world import Simulation
 
 
-def __getattr__(name: str) -> Any:
-    """Import a public name from its module the first time it is used."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'simmer' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_LAZY])
-
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
 
 __all__ = [
     "ConfigError",
