@@ -97,8 +97,12 @@ class _LogBudget:
             if now - started < 1.0:
                 self.holding = True
                 continue
-            log.warning("%s: %d more log lines in one second, not written", who, held)
+            self._say_held(who, held)
             self._spent[who] = (started, lines, 0)
+
+    @staticmethod
+    def _say_held(who: str, held: int) -> None:
+        log.warning("%s: %d more log lines in one second, not written", who, held)
 
     def log(self, client: str, level: int, text: str, *args: object) -> None:
         """Log ``text % args`` about ``client`` (already printable) unless its budget is
@@ -108,7 +112,7 @@ class _LogBudget:
         started, lines, held = self._spent.get(who, (now, 0, 0))
         if now - started >= 1.0:
             if held:
-                log.warning("%s: %d more log lines in one second, not written", who, held)
+                self._say_held(who, held)
             started, lines, held = now, 0, 0
         if lines < LOG_LINES_PER_SECOND:
             log.log(level, text, *args)

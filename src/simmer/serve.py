@@ -135,8 +135,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     :class:`~simmer.errors.SimmerError` if no window can be opened or something is already at
     ``serial_link``.
     """
-    o = options
-    runner = Runner(sim, speed=o.speed, lockstep=o.lockstep, link_delay=o.link_delay)
+    runner = Runner(
+        sim, speed=options.speed, lockstep=options.lockstep, link_delay=options.link_delay
+    )
     outcome = Outcome.attach(sim)
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
@@ -147,43 +148,49 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
     try:
-        transports = Transports(runner.bus, sim.config, o)
+        transports = Transports(runner.bus, sim.config, options)
         with transports:
-            if o.record is not None:
-                used = o.replace(link_delay=runner.link_delay if o.lockstep else None)
-                recorder = RunRecorder(sim, o.record, used, outcome, on_stop=_say(echo))
-                echo(f"recording the run into {o.record}")
-            if o.video is not None:
+            if options.record is not None:
+                used = options.replace(link_delay=runner.link_delay if options.lockstep else None)
+                recorder = RunRecorder(sim, options.record, used, outcome, on_stop=_say(echo))
+                echo(f"recording the run into {options.record}")
+            if options.video is not None:
                 from simmer.ui.video import VideoRecorder
 
-                filming = VideoRecorder(sim, o.video, controls=runner)
-                echo(f"recording a video into {o.video}")
+                filming = VideoRecorder(sim, options.video, controls=runner)
+                echo(f"recording a video into {options.video}")
             for line in transports.describe():
                 echo(line)
-            if o.lockstep:
+            if options.lockstep:
                 echo(
                     f"lockstep clock: simulated time advances only when the program sleeps, "
                     f"and {runner.link_delay:g} s per message"
                 )
-                if o.program is not None and not runs_python(o.program):
-                    echo(NOT_PYTHON.format(command=o.program))
-            if o.program is not None:
+                if options.program is not None and not runs_python(options.program):
+                    echo(NOT_PYTHON.format(command=options.program))
+            if options.program is not None:
                 before = descendants()
-                started = _start_program(o, transports, sim.config, runner.bus, stop, ended, echo)
-                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, o.program))
-            if o.window:
+                started = _start_program(
+                    options, transports, sim.config, runner.bus, stop, ended, echo
+                )
+                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, options.program))
+            if options.window:
                 from simmer.ui import run_window
 
-                run_window(runner, until=o.seconds, stop=stop, echo=echo)
+                run_window(runner, until=options.seconds, stop=stop, echo=echo)
             else:
-                pace = "as fast as possible" if o.speed is None else f"{o.speed:g}x real time"
+                pace = (
+                    "as fast as possible"
+                    if options.speed is None
+                    else f"{options.speed:g}x real time"
+                )
                 echo(f"running headless, {pace}; Ctrl-C to stop")
-                runner.run(stop_event=stop, until=o.seconds)
+                runner.run(stop_event=stop, until=options.seconds)
             if signalled:
                 echo(f"stopped ({signalled[0]})")
                 ended.insert(0, "quit")
             elif not ended:
-                limit = o.seconds is not None and sim.time >= o.seconds - 1e-9
+                limit = options.seconds is not None and sim.time >= options.seconds - 1e-9
                 ended.append("seconds" if limit else "quit")
     except KeyboardInterrupt:
         echo("stopped")
