@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import re
 import threading
 import time
 import tomllib
@@ -20,6 +21,9 @@ REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
 SIMMER_PY = REPO / "tests" / "fixtures" / "simmer_py"
 """Configuration files written in the original SimMeR's style."""
+PROJECT = EXAMPLES / "project.toml"
+COMMENTED_SETTING = re.compile(r"^# ([A-Za-z_]+ = .*)$", re.MULTILINE)
+"""A setting commented out: ``# bias = {...}`` (prose comments have no ``key = ``)."""
 SIMMER_PY_FILES = [
     SIMMER_PY / "default_config.py",
     SIMMER_PY / "lab_rover_quiet.py",
@@ -117,3 +121,21 @@ def let_time_pass(seconds: float) -> None:
     (a server's back-off); never to wait for a result, and never before an assertion on how
     long something took."""
     threading.Event().wait(seconds)  # never set: the wait is the pause
+
+
+def uncomment(text: str, line: str) -> str:
+    """``text`` with the commented-out ``line`` (``bias = ...``) made a setting."""
+    return text.replace(f"# {line}", line, 1)
+
+
+def project_data(**scenario: str) -> dict[str, Any]:
+    """examples/project.toml as data, with scenario settings replaced."""
+    data = tomllib.loads(PROJECT.read_text(encoding="utf-8"))
+    data = copy.deepcopy(data)
+    data["scenario"].update(scenario)
+    return data
+
+
+def project_sim(seed: int = 1, **scenario: str) -> Simulation:
+    """A simulation of examples/project.toml with scenario settings replaced."""
+    return Simulation(make_config(project_data(**scenario)), seed=seed)

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import signal
 import socket
 import struct
+import subprocess
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -15,6 +18,8 @@ from simmer.runner import Runner
 from simmer.serve import Served, serve
 from simmer.transport import Transports
 from simmer.world import Simulation
+
+from helpers import wait_for
 
 LONG_SILENCE = 60.0
 """A serial port's silence (s) that a test's pause is certain to be shorter than."""
@@ -104,3 +109,83 @@ def read_frame(sock: socket.socket) -> list[float]:
     width, count = struct.unpack("<BH", exactly(3))
     code = "<f" if width == 4 else "<d"
     return [value for (value,) in struct.iter_unpack(code, exactly(width * count))]
+
+
+def stream(port: int) -> socket.socket:
+    """A persistent-protocol connection to ``port`` (no Nagle delay)."""
+    sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return sock
+
+
+def closed_by_server(sock: socket.socket) -> bool:
+    """True once the server has closed ``sock`` (whatever it sent before is read and dropped)."""
+    try:
+        while sock.recv(65536):
+            pass
+    except ConnectionResetError:
+        pass
+    return True
+
+
+@contextmanager
+def loop(runner: Runner) -> Iterator[None]:
+    """Run ``runner`` in a thread until the block ends."""
+    stop = threading.Event()
+    thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        runner.bus.close()
+
+
+def launch(tmp_path: Path, *args: str, nofile: int | None = None) -> subprocess.Popen[bytes]:
+    """``simmer run --headless`` on free ports in a subprocess, output in ``tmp_path``; waits
+    until it serves."""
+    limit = f"import resource; resource.setrlimit(resource.RLIMIT_NOFILE, ({nofile}, {nofile}))"
+    code = "\n".join(
+        [
+            "import sys",
+            limit if nofile else "",
+            "from simmer.cli import main",
+            "sys.argv = ['simmer', *sys.argv[1:]]",
+            "main()",
+        ]
+    )
+    argv = ["run", "--headless", "--port", "0", "--port-rx", "0", "--port-tx", "0", *args]
+    with (tmp_path / "out").open("wb") as out, (tmp_path / "err").open("wb") as err:
+        proc = subprocess.Popen([sys.executable, "-c", code, *argv], stdout=out, stderr=err)
+    wait_for(lambda: "running headless" in output(tmp_path), "simmer run to start", 60)
+    return proc
+
+
+def output(tmp_path: Path, name: str = "out") -> str:
+    """What a process :func:`launch` started has written so far to ``name`` (out or err)."""
+    return (tmp_path / name).read_text(errors="replace")
+
+
+def stream_port_of(tmp_path: Path) -> int:
+    """The persistent port a process :func:`launch` started serves on."""
+    line = next(li for li in output(tmp_path).splitlines() if li.startswith("persistent TCP"))
+    return int(line.split(" port ")[1].split()[0])
+
+
+def stop(proc: subprocess.Popen[bytes], how: int = signal.SIGTERM) -> int:
+    """Signal ``proc`` to stop; its exit status (it is killed if it takes over 30 s)."""
+    proc.send_signal(how)
+    try:
+        return proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+        raise
+
+
+def free_port() -> int:
+    """A TCP port nothing listens on right now."""
+    with socket.create_server(("127.0.0.1", 0)) as sock:
+        port: int = sock.getsockname()[1]
+    return port

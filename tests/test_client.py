@@ -4,21 +4,19 @@ from __future__ import annotations
 
 import math
 import socket
+import subprocess
+import sys
 
 import pytest
 
-from link_support import serving
+from link_support import free_port, serving
 from simmer.client import connect
 from simmer.console import format_reply, run_console
 from simmer.errors import ConnectionFailed, ReplyTimeout
+from simmer.world import Simulation
+from simmer.world.outcome import Outcome
 
 pytestmark = pytest.mark.timeout(60)
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 def test_same_calls_over_every_transport() -> None:
@@ -73,8 +71,6 @@ def test_console_prints_replies() -> None:
 
 def test_importing_the_client_does_not_load_the_simulator() -> None:
     """A control program pays only for the link: no NumPy, Numba or pydantic."""
-    import subprocess
-    import sys
 
     code = (
         "import sys, simmer.client\n"
@@ -84,3 +80,16 @@ def test_importing_the_client_does_not_load_the_simulator() -> None:
     command = [sys.executable, "-c", code]
     result = subprocess.run(command, capture_output=True, text=True, check=True)
     assert result.stdout.strip() == ""
+
+
+def test_wait_idle_in_real_time_waits_on_the_simulator_without_busy_polls() -> None:
+    sim = Simulation.from_config()
+    outcome = Outcome.attach(sim)
+    with serving(sim, speed=1.0) as (_, link), connect(port=link.stream.port) as robot:
+        assert robot.drive("w0", 1) == math.inf  # a sixth of a second of motion
+        robot.wait_idle()
+        assert robot.drive("w0", 0) == math.inf  # done: accepted at once
+    report = outcome.report()  # the loop thread has stopped
+    assert (report.busy_replies, report.nan_replies) == (0, 0)
+    assert report.messages == 3  # w0-1, the one w0-0 that confirms the wait, and ours
+    assert sim.robot.pose.y == pytest.approx(41.0)

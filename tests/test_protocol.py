@@ -17,6 +17,7 @@ from simmer.protocol import (
     pack_replies,
     parse_command,
     parse_message,
+    printable,
     read_frame_header,
     unpack_replies,
 )
@@ -104,3 +105,23 @@ def test_valid_commands_round_trip(device: str, value: float) -> None:
     command = parse_command(f"{device}-{value!r}")
     assert command.error is None
     assert (command.device, command.value) == (device, value)
+
+
+@pytest.mark.parametrize("text", ["u0-٥", "w0-６", "w0-١٢", "w0-\u20075", "w0-5\u0665"])
+@pytest.mark.parametrize("lenient", [False, True])
+def test_digits_outside_ascii_are_not_numbers(text: str, lenient: bool) -> None:
+    command = parse_command(text, lenient=lenient)
+    assert command.error is not None
+    assert "ASCII" in command.error
+
+
+def test_printable_escapes_only_what_is_not_printable() -> None:
+    assert printable("w0-6 ٥ é") == "w0-6 ٥ é"
+    assert printable("a\x1bb\u202ec\n") == "a\\x1bb\\u202ec\\n"
+    assert printable(repr("\x1b")) == repr("\x1b")  # already escaped: unchanged
+
+
+def test_a_frame_never_says_more_values_than_its_count_can() -> None:
+    assert len(frame_replies([0.0] * 0xFFFF)) == 3 + 4 * 0xFFFF
+    with pytest.raises(ValueError, match="do not fit"):
+        frame_replies([0.0] * 0x10000)

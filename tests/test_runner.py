@@ -2,18 +2,28 @@
 
 from __future__ import annotations
 
+import logging
 import math
+import re
 import threading
+from pathlib import Path
 
 import pytest
 
-from link_support import serving
+from link_support import closed_by_server, read_frame, serving, stream, two_port_send
+from simmer.config import load_config
 from simmer.errors import BusClosed, WrongThread
-from simmer.protocol import Decoded
-from simmer.runner import Runner
+from simmer.protocol import (
+    MAX_COMMANDS,
+    Decoded,
+)
+from simmer.runner import LOG_LINES_PER_SECOND, Runner, _LogBudget
 from simmer.transport import CommandBus
+from simmer.transport.bus import Reply, Request
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent, Event
+
+from helpers import SIMMER_PY, wait_for
 
 
 @pytest.fixture
@@ -101,3 +111,92 @@ def test_only_the_loop_thread_may_drive_a_served_simulation() -> None:
             with pytest.raises(WrongThread, match="belongs to the thread running its loop"):
                 drive()
     assert sim.command("u1") == [pytest.approx(3.5)]  # the loop has ended: anyone may again
+
+
+CONTROL = "\x1b[2J\x1b[31m\u202eevil\x07"
+"""Clear the screen, turn red, reverse the line, ring the bell."""
+
+
+@pytest.mark.parametrize("config", [None, SIMMER_PY / "lab_rover_quiet.py"])
+def test_client_text_is_escaped_in_the_log(
+    config: Path | None, caplog: pytest.LogCaptureFixture
+) -> None:
+    sim = Simulation(load_config(config))
+    messages = [CONTROL, f"w0{CONTROL}", f"{CONTROL[:2]}-1", f"{CONTROL[:2]}x1", f"u0-{CONTROL}"]
+    with caplog.at_level(logging.DEBUG):
+        for message in messages:
+            sim.command(message)
+        Runner(sim).handle(Request(Decoded(None, 1, f"not text: {CONTROL}"), "client"))
+    logged = [record.getMessage() for record in caplog.records]
+    assert len(logged) >= len(messages)
+    for line in logged:
+        assert line.isprintable(), line
+    assert any("\\x1b[2J" in line for line in logged)
+
+
+def test_an_exception_executing_a_message_fails_that_request_only(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.ERROR)
+    sim = Simulation.from_config()
+
+    def observer(event: object) -> None:
+        if getattr(event, "message", None) == "u2":
+            raise RuntimeError("a faulty observer")
+
+    sim.observers.append(observer)
+    with serving(sim) as (runner, link):
+        with stream(link.stream.port) as sock:
+            sock.sendall(b"u2\n")
+            assert closed_by_server(sock)
+        assert two_port_send(link, b"u1") == [pytest.approx(3.5)]
+        assert runner.bus.submit("u1", "test").result(timeout=10) == [pytest.approx(3.5)]
+    assert "a faulty observer" in caplog.text
+
+
+def test_a_message_of_many_bad_commands_writes_a_few_log_lines(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.WARNING)
+    with serving() as (_, link), stream(link.stream.port) as sock:
+        sock.sendall(b",".join([b"zz"] * MAX_COMMANDS) + b"\n")
+        assert len(read_frame(sock)) == MAX_COMMANDS
+    bad = [r for r in caplog.records if "bad command" in r.getMessage()]
+    assert len(bad) <= 4
+    assert f"{MAX_COMMANDS - 3} more bad commands" in caplog.text
+
+
+def test_a_client_flooding_bad_commands_gets_ten_log_lines_a_second_then_a_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.WARNING, logger="simmer.runner")
+    now = [0.0]  # the budget's clock: the flood takes no time, however slow the machine
+    with serving(speed=None) as (runner, link), stream(link.stream.port) as sock:
+        runner._log = _LogBudget(clock=lambda: now[0])
+        for _ in range(400):
+            sock.sendall(b"zz\n")
+            assert math.isnan(read_frame(sock)[0])
+        assert "more log lines" not in caplog.text  # said once the second is over
+        now[0] = seconds = 1.0
+        wait_for(lambda: "more log lines in one second, not written" in caplog.text, "a count")
+    written = [r for r in caplog.records if "no device 'zz'" in r.getMessage()]
+    held = sum(
+        int(m[1])
+        for r in caplog.records
+        if (m := re.search(r"(\d+) more log lines in one second", r.getMessage()))
+    )
+    assert len(written) <= LOG_LINES_PER_SECOND * (math.ceil(seconds) + 1)
+    assert len(written) == LOG_LINES_PER_SECOND  # all 400 came within one second
+    assert len(written) + held == 400
+
+
+def test_a_request_carries_its_reasons() -> None:
+    bus = CommandBus()
+    runner = Runner(Simulation.from_config(), bus=bus)
+    request = bus.request("u0,zz", "test")
+    runner.serve()
+    assert isinstance(request.future, Reply)
+    assert request.future.result()[0] > 0
+    assert len(request.reasons) == 1
+    assert "no device 'zz'" in request.reasons[0]
+    bus.close()

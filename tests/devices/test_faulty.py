@@ -36,8 +36,10 @@ def _fail() -> float:
     return 1 / 0
 
 
+HERE = Path(__file__).name
+"""This file's name, as the simulation names the line of a device's code."""
 FAIL_LINE = _fail.__code__.co_firstlineno + 1
-REASON = f"ZeroDivisionError: division by zero (test_faulty_devices.py line {FAIL_LINE})"
+REASON = f"ZeroDivisionError: division by zero ({HERE} line {FAIL_LINE})"
 """What the simulation says about every faulty device below: the user's own line."""
 
 
@@ -302,7 +304,7 @@ def test_probe_names_a_device_whose_constructor_raises() -> None:
         ConfigIssue(
             "sensors.f0",
             "building the device raised ValueError: invalid literal for int() with base 10: "
-            f"'ten' (test_faulty_devices.py line {line}); fix the code on that line; run unfixed, "
+            f"'ten' ({HERE} line {line}); fix the code on that line; run unfixed, "
             "the device is switched off and its commands answer NaN",
         )
     ]

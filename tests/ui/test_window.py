@@ -16,6 +16,8 @@ from collections.abc import Callable, Iterator
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
+import os
+
 import numpy as np
 import pygame
 import pytest
@@ -27,12 +29,12 @@ from simmer.geometry import Pose
 from simmer.localize.messages import Localization
 from simmer.options import RunOptions
 from simmer.runner import Runner
+from simmer.serve import serve
 from simmer.transport import Transports
-from simmer.ui import Bridge, Window, run_window
+from simmer.ui import Bridge, RecordingRenderer, Window, run_window
 from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
-from simmer.ui.render import RecordingRenderer
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 
@@ -540,3 +542,28 @@ def test_drawing_never_starves_the_control_link(monkeypatch: pytest.MonkeyPatch)
     assert len(replies) == 6
     assert all(len(reply) == 1 for reply in replies[1:])
     assert not thread.is_alive()
+
+
+def test_the_window_says_one_thing_when_no_screen_is_found(
+    caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    said: list[str] = []
+    with caplog.at_level(logging.WARNING, logger="simmer.ui"):
+        serve(
+            Simulation.from_config(),
+            RunOptions.free_ports(window=True, speed=None, seconds=0.1),
+            echo=said.append,
+        )
+    assert "no screen found" in caplog.text
+    assert not any("window open" in line for line in said)
+    # with a screen, the window says it is open
+    from simmer.ui import window
+
+    monkeypatch.setattr(window.pygame.display, "get_driver", lambda: "x11")
+    said.clear()
+    serve(
+        Simulation.from_config(),
+        RunOptions.free_ports(window=True, speed=None, seconds=0.1),
+        echo=said.append,
+    )
+    assert "window open (press h for help)" in said

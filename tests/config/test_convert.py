@@ -9,10 +9,10 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
-from simmer.config import load_config
+from simmer.config import config_from_toml, load_config
 from simmer.config.convert import convert_simmer_py
 
-from helpers import SIMMER_PY_FILES
+from helpers import COMMENTED_SETTING, SIMMER_PY, SIMMER_PY_FILES, uncomment
 
 DEFAULT, QUIET, NOISY, WITH_DEVICE, TOF_DEVICE = ALL = SIMMER_PY_FILES
 
@@ -114,3 +114,52 @@ def test_cli_convert_refuses_a_broken_file(tmp_path: Path) -> None:
     assert "Traceback" not in result.output
     assert "sensors" in result.output
     assert not out.exists()
+
+
+def test_convert_carries_commented_out_settings() -> None:
+    """The quiet lab rover, converted, becomes the noisy one by uncommenting lines."""
+    text = convert_simmer_py(SIMMER_PY / "lab_rover_quiet.py")
+    w0 = text.split("[drives.w0]")[1].split("\n\n")[0]
+    assert "# bias = {x = 0, y = 0, rotation = 0.2}" in w0.splitlines()
+    assert "# error = {x = 0.02, y = 0.05, rotation = 1}" in w0.splitlines()
+    assert "# error = 0.02" in text.split("[sensors.u0]")[1].split("\n\n")[0].splitlines()
+    top_level = text.split("\n[")[0]
+    assert '# simulate_list = ["u0", "u1", "u2", "u3"]' in top_level.splitlines()
+    noisy = text
+    for toggle in COMMENTED_SETTING.findall(text):
+        noisy = uncomment(noisy, toggle)
+    converted = config_from_toml(noisy, "noisy.toml", SIMMER_PY)
+    original = load_config(SIMMER_PY / "lab_rover_noisy.py")
+    assert converted.devices == original.devices
+    assert converted.settings == original.settings
+
+
+def test_convert_leaves_out_comments_no_longer_true(tmp_path: Path) -> None:
+    """The original's "placeholder, not implemented": SimMeR 2 draws drive biases."""
+    text = (SIMMER_PY / "lab_rover_quiet.py").read_text(encoding="utf-8")
+    text = text.replace(
+        "# Randomized drive bias",
+        "# Use a randomized, normally distributed set of bias values for drives "
+        "(placeholder, not implemented)",
+    ).replace(
+        "# How intense the random drive bias is",
+        "# How intense the random drive bias is, if enabled (placeholder, not implemented)",
+    )
+    config = tmp_path / "config.py"
+    config.write_text(text, encoding="utf-8")
+    converted = convert_simmer_py(config)
+    assert "placeholder" not in converted
+    assert (
+        "rand_bias = false # Use a randomized, normally distributed set of bias values for drives"
+        in converted.splitlines()
+    )
+
+
+def test_convert_says_which_line_a_commented_setting_replaces(tmp_path: Path) -> None:
+    text = (SIMMER_PY / "lab_rover_quiet.py").read_text(encoding="utf-8")
+    text = text.replace("    #'error': 0.02,", "    'error': 0.0,\n    #'error': 0.02,  # noisy")
+    config = tmp_path / "config.py"
+    config.write_text(text, encoding="utf-8")
+    u0 = convert_simmer_py(config).split("[sensors.u0]")[1].split("\n\n")[0].splitlines()
+    assert "error = 0.0" in u0
+    assert "# error = 0.02  # noisy; uncomment only after deleting the other `error` line" in u0

@@ -18,7 +18,8 @@ from types import ModuleType
 
 import pytest
 
-REPO = Path(__file__).resolve().parent.parent
+from helpers import REPO
+
 LAB_PAGE = (REPO / "docs" / "lab1.md").read_text(encoding="utf-8")
 README = (REPO / "README.md").read_text(encoding="utf-8")
 ACTIVATE = "source .venv/bin/activate"

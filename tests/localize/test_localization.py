@@ -1,5 +1,5 @@
-"""Localization tools (issue 22): the maze for programs, expected readings, beliefs shown,
-recorded and replayed, and localization measured."""
+"""Localization tools (issue 22): the maze for programs, beliefs shown, bounded, recorded and
+replayed, and localization measured in served runs and sweeps."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import logging
 import math
 import socket
 import sys
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -30,103 +29,14 @@ from simmer.runner import LocalLink
 from simmer.serve import serve
 from simmer.world import Simulation
 from simmer.world.events import SHOWN, BeliefEvent, CommandEvent, EstimateEvent, Event, RunEvent
-from simmer.world.expected import SUPPORTED, parse_headings, table
-from simmer.world.localization import LocalizationReport, Tracker, errors, localized_at
+from simmer.world.localization import errors
 
-from helpers import EXAMPLES, REPO, make_config
+from helpers import EXAMPLES, REPO
 
 pytestmark = pytest.mark.timeout(180)
 
+
 EXAMPLE = EXAMPLES / "histogram_localization.py"
-
-
-def quiet_default() -> Simulation:
-    """examples/simmer_default.toml (ultrasonic, gyroscope, compass, infrared) with no noise."""
-    data = tomllib.loads((EXAMPLES / "simmer_default.toml").read_text(encoding="utf-8"))
-    for sensor in data["sensors"].values():
-        if "error" in sensor:
-            sensor["error"] = 0.0
-    data["sensors"]["c0"]["bias"] = 7.5  # a compass's bias is part of its noise-free reading
-    return Simulation(make_config(data), seed=3)
-
-
-# ----------------------------------------------------------------------------- expected
-
-
-def test_expected_equals_the_sensors_noise_free_readings_at_1000_random_poses() -> None:
-    sim = quiet_default()
-    kinds = {d.id: type(d).kind for d in sim.robot.sensors.values()}
-    ids = [i for i, kind in kinds.items() if kind in SUPPORTED]
-    assert {kinds[i] for i in ids} == set(SUPPORTED)
-    rng = np.random.default_rng(22)
-    poses = np.column_stack(
-        (
-            rng.uniform(-2, sim.maze.width + 2, 1000),  # a few with sensors outside the maze
-            rng.uniform(-2, sim.maze.height + 2, 1000),
-            rng.uniform(-720, 720, 1000),
-        )
-    )
-    poses[:20] = [sim.block.x, sim.block.y + 10, 180.0]  # facing the block
-    wanted = sim.expected(poses, ids)
-    for pose, row in zip(poses, wanted, strict=True):
-        sim.robot.pose = Pose(*pose)
-        assert sim.command(",".join(ids)) == row.tolist(), pose
-    seen_block = sim.expected(poses[:20], ids, block=True)
-    walls_only = sim.expected(poses[:20], ids, block=False)
-    assert (seen_block != walls_only).any()
-
-
-def test_expected_refuses_the_kinds_it_cannot_answer_by_name() -> None:
-    sim = quiet_default()
-    with pytest.raises(ValueError, match=r"'g0'.*gyroscope integrates"):
-        sim.expected([10.0, 10.0, 0.0], ["g0"])
-    with pytest.raises(ValueError, match="no sensor 'u9'"):
-        sim.expected([10.0, 10.0, 0.0], ["u9"])
-    with pytest.raises(ValueError, match="shape"):
-        sim.expected([[1.0, 2.0]], ["u0"])
-
-
-def test_a_table_is_expected_at_its_grid_and_nan_in_solid_cells() -> None:
-    sim = Simulation.from_config()
-    headings = parse_headings("0:360:45")
-    xs, ys, ids, readings = table(sim, 6.0, headings)
-    assert readings.shape == (len(ys), len(xs), 8, 4)
-    row, col = 1, 3
-    poses = np.column_stack((np.full(8, xs[col]), np.full(8, ys[row]), headings))
-    if sim.maze.solid[int(ys[row] // sim.maze.cell), int(xs[col] // sim.maze.cell)]:
-        assert np.isnan(readings[row, col]).all()
-    else:
-        assert np.array_equal(readings[row, col], sim.expected(poses, ids, block=False))
-    solid = sim.maze.solid[(ys // sim.maze.cell).astype(int)][:, (xs // sim.maze.cell).astype(int)]
-    assert np.isnan(readings[solid]).all()
-    assert not np.isnan(readings[~solid]).any()
-    with pytest.raises(ValueError, match="START:STOP:STEP"):
-        parse_headings("0-360")
-
-
-def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
-    runner = CliRunner()
-    npz, csv = tmp_path / "t.npz", tmp_path / "t.csv"
-    for path in (npz, csv):
-        result = runner.invoke(
-            app, ["table", "--step", "8", "--headings", "0:360:90", "-o", str(path)]
-        )
-        assert result.exit_code == 0, result.output
-    data = np.load(npz)
-    assert list(data["sensors"]) == ["u0", "u1", "u2", "u3"]
-    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
-    assert csv.read_text().splitlines()[0] == "x,y,heading,u0,u1,u2,u3"
-    readings = data["readings"]
-    assert len(rows) == int((~np.isnan(readings[..., 0])).sum())
-    x, y, h = rows[0, :3]
-    i, j, k = list(data["y"]).index(y), list(data["x"]).index(x), list(data["headings"]).index(h)
-    assert np.allclose(rows[0, 3:], readings[i, j, k], rtol=1e-5)
-    bad = runner.invoke(app, ["table", "-o", str(tmp_path / "t.txt")])
-    assert bad.exit_code == 1
-    assert ".npz or .csv" in bad.output
-
-
-# ----------------------------------------------------------------------------- the maze
 
 
 def test_the_maze_over_the_persistent_protocol_and_export_map_agree_with_the_config(
@@ -176,9 +86,6 @@ def _read(sock: socket.socket, size: int) -> bytes:
         assert chunk
         data += chunk
     return data
-
-
-# ----------------------------------------------------------------------------- bounds
 
 
 def test_a_million_particles_are_cut_to_the_bound_counted_and_logged(
@@ -250,30 +157,6 @@ def test_a_belief_that_is_not_one_is_one_line() -> None:
     belief, cut = parse_belief('{"particles": [[1, 2, 3, "nan"], [1, 2, 3, 0.5]], "labels": []}')
     assert cut == 1
     assert belief.particles.tolist() == [[1, 2, 3, 1.0]]
-
-
-# ----------------------------------------------------------------------------- metrics
-
-
-def test_localized_is_the_first_estimate_within_from_which_it_stays_within() -> None:
-    truth = Pose(10.0, 10.0, 359.0)
-    assert errors(Pose(10.0, 13.0, 1.0), truth) == pytest.approx((3.0, 2.0))
-    tracker = Tracker()
-    for time, pose in [
-        (1.0, Pose(40.0, 10.0, 0.0)),
-        (2.0, Pose(11.0, 10.0, 5.0)),  # within
-        (3.0, Pose(11.0, 10.0, 40.0)),  # heading off: out again
-        (4.0, Pose(12.0, 11.0, 350.0)),  # within from here on
-        (5.0, Pose(10.0, 10.0, 359.0)),
-    ]:
-        tracker.add(time, pose, truth)
-    report = tracker.report()
-    assert report == LocalizationReport(5, 2.0, 4.0, 0.0, 0.0)
-    assert localized_at([(t, p, h) for t, p, h in tracker.series]) == 4.0
-    assert Tracker().report() is None
-
-
-# ----------------------------------------------------------------------------- served runs
 
 
 def fingerprint(events: list[Event]) -> str:

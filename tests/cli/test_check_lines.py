@@ -13,7 +13,8 @@ from simmer.cli import app
 from simmer.config import load_config, with_settings
 from simmer.errors import ConfigError
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+from helpers import EXAMPLES
+
 LAB1 = (EXAMPLES / "lab1_rover.toml").read_text(encoding="utf-8")
 
 

@@ -10,10 +10,19 @@ import math
 
 import pytest
 
+from simmer import Simulation
 from simmer.world.events import Event, ReachedEvent
 from simmer.world.outcome import Outcome, OutcomeReport
 
-from helpers import LAB_SEQUENCE, make_sim, run_sequence
+from helpers import (
+    EXAMPLES,
+    LAB_SEQUENCE,
+    make_config,
+    make_sim,
+    project_data,
+    project_sim,
+    run_sequence,
+)
 
 SPEED = 6.0
 """in/s of the default rover's drive w0."""
@@ -209,3 +218,73 @@ def test_report_is_plain_json_data() -> None:
     assert data["task2_time"] == report.task2_time
     assert data["nan_replies"] == 1
     assert data["first_collision"] is None
+
+
+DELIVER_TO_B3 = ["w0-25", "g0-1", "w0--25", "r0-90", "w0-24", "r0--90", "w0-6", "g0-0"]
+"""From the lab's start: up into the loading zone around a block at [6, 14], back to the
+bottom row, right two cells, up into B3 (cell [2, 2]) and let go."""
+
+
+@pytest.mark.parametrize(("target", "score"), [("B3", 100.0), ("B1", 50.0)])
+def test_milestones_and_score_of_a_delivery(target: str, score: float) -> None:
+    sim = project_sim(block="6,14", target=target)
+    outcome = Outcome.attach(sim)
+    times = []
+    for message in DELIVER_TO_B3:
+        sim.command(message)
+        sim.run_until_idle()
+        times.append(sim.time)
+    project = outcome.report().project
+    assert project is not None
+    assert project.target == target
+    assert sim.collisions == 0
+    assert sim.zones.dropoff_at(sim.block.x, sim.block.y) == "B3"
+    assert project.entered_loading
+    assert project.picked_up
+    assert project.left_loading
+    assert project.entered_loading_at is not None
+    assert project.entered_loading_at < times[0]
+    assert project.picked_up_at == times[0]  # the command at the end of the first move
+    assert project.left_loading_at is not None
+    assert times[1] < project.left_loading_at < times[2]
+    assert project.delivered is (target == "B3")
+    assert project.delivered_at == (times[-1] if target == "B3" else None)
+    assert project.wrong_zone == (None if target == "B3" else "B3")
+    assert project.score == score
+    line = outcome.report().summary()
+    assert f"project (target {target})" in line
+    assert f"score {score:g}" in line
+    flat = outcome.report().as_dict()
+    assert flat["delivered"] is (target == "B3")
+    assert flat["score"] == score
+
+
+def test_collisions_and_the_time_limit_cost_points() -> None:
+    data = project_data(block="6,14", target="B3")
+    data["score"] = {"collision": -5, "time_limit": 10}
+    sim = Simulation(make_config(data), seed=1)
+    outcome = Outcome.attach(sim)
+    sim.command("w0--10")  # backwards into the bottom wall
+    sim.run_until_idle()
+    assert sim.place_robot(6.0, 42.0, 180.0)  # back to the start, by hand
+    for message in DELIVER_TO_B3:
+        sim.command(message)
+        sim.run_until_idle()
+    project = outcome.report().project
+    assert project is not None
+    assert project.delivered
+    assert project.left_loading_at is not None
+    assert project.left_loading_at < 10
+    assert project.delivered_at is not None
+    assert project.delivered_at > 10
+    assert project.score == 10 + 20 + 10 - 5  # the delivery came too late; one collision
+
+
+def test_a_lab1_run_has_no_project_in_its_outcome() -> None:
+    sim = Simulation.from_config(EXAMPLES / "lab1_rover.toml")
+    outcome = Outcome.attach(sim)
+    sim.step()
+    report = outcome.report()
+    assert report.project is None
+    assert "project" not in report.summary()
+    assert "score" not in report.as_dict()

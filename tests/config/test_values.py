@@ -446,3 +446,20 @@ def test_a_huge_walls_matrix_in_a_config_py_is_refused_before_it_is_copied(
     (issue,) = caught.value.issues
     assert (issue.key, issue.line) == ("walls", 4)
     assert "10,000 rows" in issue.message
+
+
+@pytest.mark.parametrize("encoding", ["rot13", "hex", "utf-16", "utf-32", "base64", "nope"])
+def test_str_encoding_that_cannot_carry_the_protocol_is_refused(encoding: str) -> None:
+    data = default_data()
+    data["str_encoding"] = encoding
+    with pytest.raises(ConfigError) as caught:
+        make_config(data)
+    assert "str_encoding" in str(caught.value)
+    assert "use 'utf-8' or 'ascii'" in str(caught.value)
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "ascii", "latin-1", "cp1252"])
+def test_text_encodings_that_write_ascii_as_ascii_are_accepted(encoding: str) -> None:
+    data = default_data()
+    data["str_encoding"] = encoding
+    assert make_config(data).settings.str_encoding == encoding

@@ -33,6 +33,7 @@ from simmer.record import (
     write_report_md,
 )
 from simmer.record.eventlog import TYPE_NAMES, event_from_dict, event_line
+from simmer.record.runfolder import project_lines
 from simmer.record.trace import POSE_COLUMNS
 from simmer.world.events import (
     BeliefEvent,
@@ -351,3 +352,30 @@ def test_a_run_killed_with_sigkill_leaves_events_whose_every_line_parses(tmp_pat
     assert not (folder / "report.json").exists()  # killed: no report, the events are whole
     config, seed, recorded = load_run(folder)
     assert replay(config, seed, recorded).differences == []
+
+
+def test_report_md_defines_reached_and_the_stopwatch(tmp_path: Path) -> None:
+    from simmer.record import RunRecorder
+
+    sim = Simulation.from_config(seed=1)
+    with RunRecorder(sim, tmp_path / "run"):
+        sim.command("w0-6")
+        sim.command("w0-0")  # busy
+        sim.run_until_idle()
+    report = (tmp_path / "run" / "report.md").read_text(encoding="utf-8")
+    assert "within 1 in of the block's" in report
+    assert "first motion" in report
+    assert "| Busy replies (a drive still moving), NaN replies | 1, 0 |" in report
+    outcome = json.loads((tmp_path / "run" / "report.json").read_text(encoding="utf-8"))
+    assert outcome["outcome"]["busy_replies"] == 1
+
+
+def test_report_md_project_lines_take_only_what_is_well_formed() -> None:
+    outcome = {"entered_loading_at": 4.5, "picked_up_at": "soon", "score": 30.0}
+    good = project_lines(outcome, {"start": [6, 42, 180], "block": [7.25, 8.5], "target": "B2"})
+    assert "Started at [6, 42] heading 180 deg; the block at [7.25, 8.50]; target zone B2." in good
+    assert "| Entered the loading zone | 4.50 s |" in good
+    assert "| Picked up the block | no |" in good  # not a number: said as not met
+    assert "**Score: 30** (the rubric is in the manifest)." in good
+    hostile = project_lines({"score": "x", "wrong_zone": 5}, {"start": "here", "block": None})
+    assert not any("Started" in line or "Score" in line or "another" in line for line in hostile)

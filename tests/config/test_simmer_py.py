@@ -17,7 +17,7 @@ from simmer.config import load_config
 from simmer.config.convert import convert_simmer_py
 from simmer.errors import ConfigError
 
-from helpers import LAB_SEQUENCE, SIMMER_PY_FILES
+from helpers import LAB_SEQUENCE, SIMMER_PY, SIMMER_PY_FILES
 from helpers import SIMMER_PY as FIXTURES
 
 DEFAULT, QUIET, NOISY, WITH_DEVICE, TOF_DEVICE = ALL = SIMMER_PY_FILES
@@ -358,3 +358,9 @@ def test_syntax_error_in_a_user_device_names_its_file(tmp_path: Path) -> None:
 def test_exit_in_config_is_an_error_not_an_exit(tmp_path: Path) -> None:
     path = edited(tmp_path, QUIET, "robot_width = 6 ", "import sys; sys.exit(3)\nrobot_width = 6 ")
     assert f"{path}:{line_of(path, 'sys.exit')}: running" in str(error_of(path))
+
+
+def test_a_config_py_run_answers_nan_to_digits_outside_ascii() -> None:
+    sim = Simulation(load_config(SIMMER_PY / "lab_rover_quiet.py"))
+    assert math.isnan(sim.command("w0-６")[0])
+    assert sim.command("w0-6") == [math.inf]

@@ -12,7 +12,9 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parent.parent / "src" / "simmer"
+from helpers import REPO
+
+SRC = REPO / "src" / "simmer"
 
 LAYERS = [
     {"pose", "ports", "errors", "protocol", "proctree", "colors", "lazy"},

@@ -3,14 +3,24 @@ would drive the Arduino's Bluetooth port."""
 
 from __future__ import annotations
 
+import logging
 import math
+import os
 import struct
 from pathlib import Path
 
 import pytest
 import serial
 
-from link_support import LONG_SILENCE, serving
+from link_support import LONG_SILENCE, loop, serving
+from simmer.errors import SimmerError
+from simmer.protocol import (
+    Decoded,
+    PackedCodec,
+)
+from simmer.runner import Runner
+from simmer.transport import CommandBus, SerialServer
+from simmer.world import Simulation
 
 from helpers import wait_for
 
@@ -76,3 +86,55 @@ def test_non_utf8_and_oversize_get_nan_and_serving_continues() -> None:
             while math.isnan(replies[-1]):
                 replies += floats(port.read(4))
             assert replies[-1] == pytest.approx(3.5)
+
+
+class _FlakyCodec(PackedCodec):
+    """Packed replies, except that decoding ``boom`` raises (a codec bug)."""
+
+    def decode(self, data: bytes) -> Decoded:
+        if data == b"boom":
+            raise RuntimeError("codec bug")
+        return super().decode(data)
+
+
+def test_an_exception_answering_one_serial_message_keeps_the_port(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.ERROR)
+    runner = Runner(Simulation.from_config(), speed=None)
+    port = SerialServer(runner.bus, codec=_FlakyCodec())
+    with port, loop(runner), serial.Serial(port.path, 9600, timeout=10) as tty:
+        for _ in range(3):
+            tty.write(b"boom\n")
+        tty.write(b"u1\n")
+        assert struct.unpack("<f", tty.read(4)) == (pytest.approx(3.5),)
+    logged = [r for r in caplog.records if "codec bug" in r.getMessage()]
+    assert len(logged) == 1  # the first failure in full, the rest counted
+    assert "3 messages could not be answered" in caplog.text
+
+
+@pytest.mark.parametrize("kind", ["symlink", "dangling", "file"])
+def test_serial_link_never_replaces_what_it_did_not_create(tmp_path: Path, kind: str) -> None:
+    target = tmp_path / "my-robot"
+    target.write_text("mine")
+    path = tmp_path / "robot"
+    if kind == "symlink":
+        path.symlink_to(target)
+    elif kind == "dangling":
+        path.symlink_to(tmp_path / "gone")
+    else:
+        path.write_text("a file")
+    before = os.readlink(path) if path.is_symlink() else path.read_text()
+    with pytest.raises(SimmerError, match="already there"):
+        SerialServer(CommandBus(), path)
+    after = os.readlink(path) if path.is_symlink() else path.read_text()
+    assert after == before
+
+
+def test_serial_link_replaced_meanwhile_is_left_alone(tmp_path: Path) -> None:
+    path = tmp_path / "robot"
+    port = SerialServer(CommandBus(), path)
+    with port:
+        path.unlink()
+        path.symlink_to(tmp_path / "someone-elses")
+    assert os.readlink(path) == str(tmp_path / "someone-elses")
