@@ -116,3 +116,19 @@ def test_a_headless_package_never_imports_pygame(package: str) -> None:
             while module:  # importing a module imports its packages' __init__ too
                 todo.append(module)
                 module = module.rpartition(".")[0]
+
+
+WHOLE = {"repository", "fixtures"}
+"""Test folders about the whole: the repository (layers, imports, scripts, docs, examples, a
+fresh clone) and the files the tests read."""
+
+
+def test_the_tests_mirror_the_source() -> None:
+    """Each test folder is a package or a module of ``src/simmer`` (a large module, ``cli``,
+    has a folder of files, one per command), so a module's tests are found by its name."""
+    tests = REPO / "tests"
+    units = {path.stem for path in SRC.iterdir() if not path.name.startswith(("_", "."))}
+    folders = {path.name for path in tests.iterdir() if path.is_dir()} - {"__pycache__"}
+    assert folders - WHOLE <= units, sorted(folders - WHOLE - units)
+    loose = [path.stem.removeprefix("test_") for path in tests.glob("test_*.py")]
+    assert all(name.split("_")[0] in units for name in loose), loose
