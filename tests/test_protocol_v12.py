@@ -201,10 +201,10 @@ def test_v12_program_over_the_serial_port_reads_frames_until_the_end_character()
             port.write(b"noise\n[zz][xx]")  # the robot reads until ']': two messages
             assert port.read_until(b"]") == b"[zz:Not Found]"
             assert port.read_until(b"]") == b"[xx:DRIVE STOP]"
-            read = link.serial.received
+            sent = len(b"[u0]" + b"[u0,u1]\n" + b"noise\n[zz][xx]")  # counted after their replies
             port.write(b"[w0:")  # a frame split across two writes, past the silence (none)
             port.flush()
-            wait_for(lambda: link.serial is not None and link.serial.received == read + 4, "[w0:")
+            wait_for(lambda: link.serial is not None and link.serial.received == sent + 4, "[w0:")
             port.write(b"6]")
             assert port.read_until(b"]") == b"[w0:True]"
             port.write(b"[u1]")
