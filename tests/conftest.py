@@ -1,4 +1,5 @@
-"""Test setup: no window ever opens (SDL dummy drivers); a fixture keeping a CPU busy."""
+"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; a fixture
+keeping a CPU busy."""
 
 import os
 import subprocess
@@ -11,6 +12,19 @@ import pytest
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 sys.path.insert(0, str(Path(__file__).parent))
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The ``fresh`` and ``slow`` tests first (in their order; the rest after, in theirs): the
+    suite is spread over every CPU (``-n auto``), and a test of seconds started last would
+    keep one CPU busy after the others are done."""
+
+    def order(item: pytest.Item) -> int:
+        if item.get_closest_marker("fresh") is not None:
+            return 0
+        return 1 if item.get_closest_marker("slow") is not None else 2
+
+    items.sort(key=order)
 
 
 @pytest.fixture

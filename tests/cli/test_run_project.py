@@ -119,6 +119,7 @@ def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     assert "**Score: 100**" in report_md
 
 
+@pytest.mark.slow
 def test_a_video_frame_shows_the_zones_and_the_carried_block(tmp_path: Path) -> None:
     path = tmp_path / "project.mp4"
     result = cli("--seed", "5", "--target", "B3", "--program", PROGRAM, "--answer", "{target}",
@@ -187,6 +188,7 @@ def test_success_conditions_may_name_milestones() -> None:
         success_condition("deliverd")
 
 
+@pytest.mark.slow
 def test_a_sweep_over_targets_and_starts(tmp_path: Path) -> None:
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(

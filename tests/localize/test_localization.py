@@ -88,6 +88,7 @@ def _read(sock: socket.socket, size: int) -> bytes:
     return data
 
 
+@pytest.mark.slow
 def test_a_million_particles_are_cut_to_the_bound_counted_and_logged(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
@@ -263,6 +264,7 @@ def test_the_example_localizes_with_all_four_sensors_in_process() -> None:
     assert errors(Pose(x, y, heading), truth) == pytest.approx((0.0, 0.0), abs=1e-6)
 
 
+@pytest.mark.slow
 def test_a_sweep_reports_time_to_localize_per_start_cell(tmp_path: Path) -> None:
     sweep = tmp_path / "sweep.toml"
     config = EXAMPLES / "project.toml"

@@ -128,6 +128,7 @@ def test_dead_reckoning_under_the_lockstep_clock_is_the_same_at_every_speed() ->
     assert all(report == first for report in reports)
 
 
+@pytest.mark.slow
 def test_the_cli_says_how_a_program_run_ended(tmp_path: Path) -> None:
     script = tmp_path / "quits.py"
     script.write_text("import time\ntime.sleep(1.5)\nraise SystemExit(5)\n")

@@ -95,6 +95,7 @@ def test_a_message_sent_before_a_sleep_is_taken_before_the_sleep(
     assert clock[0] == (1, pytest.approx(0.1))
 
 
+@pytest.mark.slow
 def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -114,6 +115,7 @@ def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
     assert sim.time == pytest.approx(0.5, abs=sim.dt)
 
 
+@pytest.mark.slow
 def test_a_sweep_of_a_send_then_sleep_program_is_the_same_at_any_worker_count(
     tmp_path: Path,
 ) -> None:
@@ -152,6 +154,7 @@ def without_wall_time(rows: list[dict[str, str]]) -> list[dict[str, str]]:
     return [{k: v for k, v in row.items() if k != "wall_time"} for row in rows]
 
 
+@pytest.mark.slow
 def test_the_originals_dead_reckoning_idea_prints_the_same_three_times(busy_cpu: None) -> None:
     # The issue's report: `simmer run config.py --headless --program "python3 -u
     # dead_reckoning.py"` with drive error on printed other readings each run.

@@ -136,6 +136,7 @@ def assert_answered(args: list[str]) -> None:
     assert seconds < CPU_BOUND, seconds
 
 
+@pytest.mark.slow
 @settings(
     max_examples=80,
     deadline=None,
@@ -151,6 +152,7 @@ def test_a_fuzzed_run_folder_is_replayed_or_refused(
     assert_answered(["replay", str(folder), "--check"])
 
 
+@pytest.mark.slow
 @settings(
     max_examples=25,
     deadline=None,

@@ -156,6 +156,7 @@ def test_a_run_recording_onto_a_small_disk_keeps_serving(small_disk: Path, tmp_p
     assert check.incomplete is not None
 
 
+@pytest.mark.slow
 def test_a_recorded_run_stops_at_an_hour_of_simulated_time(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     done = subprocess.run(

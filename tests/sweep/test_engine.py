@@ -61,6 +61,7 @@ def kept_files(folder: Path) -> dict[str, bytes]:
     }
 
 
+@pytest.mark.slow
 def test_a_policy_sweep_is_the_same_on_every_engine(tmp_path: Path, cluster: Any) -> None:
     shutil.copy(FIXTURES / "sweep_policies.py", tmp_path)
     data = {
@@ -86,6 +87,7 @@ def test_a_policy_sweep_is_the_same_on_every_engine(tmp_path: Path, cluster: Any
     assert kept_files(tmp_path / "dask") == frames
 
 
+@pytest.mark.slow
 def test_a_program_sweep_is_the_same_on_every_engine(tmp_path: Path) -> None:
     """The external program talks TCP to a simulator served on free ports in each worker; the
     Dask engine here starts (and stops) a local cluster of its own."""

@@ -118,6 +118,7 @@ def assert_all_gone(sweep: subprocess.Popen[str], below: set[int], folder: Path)
     assert not any(alive(pid) for pid in pids(folder, "child"))  # the detached children too
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     sweep_folder: Path, signum: int
@@ -142,6 +143,7 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     assert len(results) == 1 + 4
 
 
+@pytest.mark.slow
 def test_the_workers_of_a_killed_sweep_exit_with_their_programs(sweep_folder: Path) -> None:
     sweep, below = running_sweep(sweep_folder)
     sweep.kill()  # SIGKILL: the sweep cannot clean up; its workers notice it is gone

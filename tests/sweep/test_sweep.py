@@ -303,6 +303,7 @@ def test_failures_are_told_apart() -> None:
 # ----------------------------------------------------------------------------- sweeps
 
 
+@pytest.mark.slow
 def test_policy_sweep_is_parallel_reproducible_and_resumable(tmp_path: Path) -> None:
     spec = policy_sweep(tmp_path, "drive_and_stop", seeds=3, grid={NOISE: [0.0, 0.1]})
     first = run_sweep(spec, tmp_path / "a", workers=2)
@@ -338,6 +339,7 @@ def test_policy_sweep_is_parallel_reproducible_and_resumable(tmp_path: Path) -> 
     assert (tmp_path / "a" / "final_positions.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_resume_runs_only_what_is_missing(tmp_path: Path) -> None:
     spec = policy_sweep(tmp_path, "drive_and_stop", seeds=2, grid={NOISE: [0.0, 0.1]})
     run_sweep(spec, tmp_path / "out", workers=2)
@@ -349,6 +351,7 @@ def test_resume_runs_only_what_is_missing(tmp_path: Path) -> None:
     assert without_wall_time(read_table(table)) == without_wall_time(list(csv.DictReader(full)))
 
 
+@pytest.mark.slow
 def test_failing_policies_are_recorded_and_the_sweep_finishes(tmp_path: Path) -> None:
     cases = {
         "crash": ("error", "this policy always fails", {}),
@@ -371,6 +374,7 @@ def test_failing_policies_are_recorded_and_the_sweep_finishes(tmp_path: Path) ->
     assert float(slept[0]["time"]) == pytest.approx(5.0, abs=0.1)
 
 
+@pytest.mark.slow
 def test_a_hanging_program_is_stopped_at_the_wall_limit(tmp_path: Path) -> None:
     command = f'"{sys.executable}" -c "print(chr(0) * 50, flush=True)\nwhile True: pass"'
     spec = sweep_from_dict(
@@ -384,6 +388,7 @@ def test_a_hanging_program_is_stopped_at_the_wall_limit(tmp_path: Path) -> None:
     # how soon after: benchmarks/bench_limits.py
 
 
+@pytest.mark.slow
 def test_minimal_sweep_file_through_the_cli(tmp_path: Path) -> None:
     shutil.copy(SIMMER_PY / "lab_rover_quiet.py", tmp_path / "config.py")
     shutil.copy(EXAMPLES / "dead_reckoning.py", tmp_path)
@@ -438,6 +443,7 @@ def test_the_example_sweep_files_load(name: str, runs: int, columns: tuple[str, 
 # ----------------------------------------------------------------------------- what is kept
 
 
+@pytest.mark.slow
 def test_failures_are_kept_with_frames_and_the_first_are_filmed(tmp_path: Path) -> None:
     spec = policy_sweep(
         tmp_path, "drive_and_stop", seeds=3, grid={NOISE: [0.0, 0.1]}, success="reached", videos=2
@@ -493,6 +499,7 @@ def test_keep_all_or_nothing(tmp_path: Path, keep: str) -> None:
 # ----------------------------------------------------------------------------- isolation
 
 
+@pytest.mark.slow
 def test_a_crashing_program_is_recorded_with_its_stderr(tmp_path: Path) -> None:
     command = (
         f'"{sys.executable}" -c "import sys; print(42)\n'
@@ -533,6 +540,7 @@ def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
     assert results[0].wall_time > 0.4  # not before its limit; how soon after: bench_limits.py
 
 
+@pytest.mark.slow
 def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
     shutil.copy(POLICIES, tmp_path)
     sweep = tmp_path / "sweep.toml"

@@ -370,6 +370,7 @@ def dropped(caplog: pytest.LogCaptureFixture) -> int:
     return sum(int(match[1]) for match in found if match)
 
 
+@pytest.mark.slow
 def test_out_of_descriptors_backs_off_logs_once_and_recovers(tmp_path: Path) -> None:
     proc = launch(tmp_path, nofile=48)
     try:

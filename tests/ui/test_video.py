@@ -198,6 +198,7 @@ def test_a_video_is_made_without_any_display(tmp_path: Path) -> None:
     assert length == pytest.approx(0.6)
 
 
+@pytest.mark.slow
 def test_memory_does_not_grow_with_the_length_of_the_video(tmp_path: Path) -> None:
     sim = Simulation.from_config()
     path = tmp_path / "long.mp4"
@@ -313,6 +314,7 @@ def simmer_run(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(command, check=False, capture_output=True, text=True, timeout=60)
 
 
+@pytest.mark.slow
 def test_simmer_run_video_writes_a_decodable_file(tmp_path: Path) -> None:
     path = tmp_path / "out.mp4"
     done = simmer_run("--seconds", "1", "--video", str(path))
@@ -341,6 +343,7 @@ def test_simmer_run_video_makes_its_folder(tmp_path: Path) -> None:
     assert path.stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:
     path = tmp_path / "stopped.mp4"
     command = [sys.executable, "-m", "simmer", "run", "--headless", "--video", str(path), *PORTS]
