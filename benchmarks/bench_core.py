@@ -134,7 +134,7 @@ def steps_per_second(
         for _ in range(count):
             keep_moving()
             sim.step()
-            if sample and sim.frame % every == 0:
+            if sample and sim.steps % every == 0:
                 sim.command(sample)
 
     run(200)

@@ -71,7 +71,7 @@ def drive_noisily(sim: Simulation, reset: bool = True) -> None:
         sim.command(message)
         while sim.robot.any_drive_moving:
             sim.step()
-            if sim.frame % 7 == 0:
+            if sim.steps % 7 == 0:
                 sim.command("u0,w0-0,u9")  # u9: no such device, NaN
     sim.set_manual_keys("wd")
     sim.step(40)

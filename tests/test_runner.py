@@ -75,7 +75,7 @@ def test_paused_runner_serves_but_does_not_step() -> None:
         stop.set()
         thread.join()
     runner.step_once()
-    assert runner.sim.frame == 1
+    assert runner.sim.steps == 1
 
 
 def test_speed_is_validated_and_changeable(runner: Runner) -> None:

@@ -185,7 +185,7 @@ class Runner:
         if self.sim.observers:
             sim = self.sim
             rate = math.nan if value is None else value
-            sim.emit(RunEvent(sim.time, "speed", rate, sim.frame))
+            sim.emit(RunEvent(sim.time, "speed", rate, sim.steps))
 
     @property
     def paused(self) -> bool:
@@ -196,7 +196,7 @@ class Runner:
     def paused(self, value: bool) -> None:
         if value != self._paused and self.sim.observers:
             sim = self.sim
-            sim.emit(RunEvent(sim.time, "pause" if value else "resume", 0.0, sim.frame))
+            sim.emit(RunEvent(sim.time, "pause" if value else "resume", 0.0, sim.steps))
         self._paused = value
 
     @property
@@ -304,7 +304,7 @@ class Runner:
         sim = self.sim
         if sim.observers:
             asked = clock.seconds if clock.kind == "sleep" else math.nan
-            sim.emit(RunEvent(sim.time, "clock", asked, sim.frame, clock.kind))
+            sim.emit(RunEvent(sim.time, "clock", asked, sim.steps, clock.kind))
         if not self.lockstep:
             if clock.kind == "sleep":
                 self._waits.append(_Wait(request, sim.time + clock.seconds))
@@ -337,7 +337,7 @@ class Runner:
         sim = self.sim
         robot = sim.robot
         while self._due():
-            if (sim.frame + 1) * sim.dt <= self.clock + EPSILON:
+            if (sim.steps + 1) * sim.dt <= self.clock + EPSILON:
                 sim.step()
             else:
                 deadline = min(w.deadline for w in self._waits if w.until is None) - EPSILON
@@ -349,7 +349,7 @@ class Runner:
     def _due(self) -> bool:
         """Lockstep: whether the simulation must step to catch up with the clock or a wait."""
         sim = self.sim
-        if (sim.frame + 1) * sim.dt <= self.clock + EPSILON:
+        if (sim.steps + 1) * sim.dt <= self.clock + EPSILON:
             return True
         return any(w.until is None and self._moving(w) for w in self._waits)
 
@@ -369,7 +369,7 @@ class Runner:
                     self.clock = max(self.clock, sim.time)
                 value = self.clock if self.lockstep else sim.time
             elif self.lockstep:
-                done = (sim.frame + 1) * sim.dt > wait.until + EPSILON
+                done = (sim.steps + 1) * sim.dt > wait.until + EPSILON
                 value = wait.until
             else:
                 done = sim.time >= wait.until - EPSILON

@@ -173,7 +173,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                 started = _start_program(
                     options, transports, sim.config, runner.bus, stop, ended, echo
                 )
-                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.frame, options.program))
+                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.steps, options.program))
             if options.window:
                 from simmer.ui import run_window
 
@@ -209,7 +209,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
         restore_signals()
     status = started.process.returncode if started is not None and ended[0] == "program" else None
     if status is not None:  # here, in the thread that owns the simulation
-        sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.frame))
+        sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.steps))
     served = Served(runner, outcome, ended[0], status, program_started=started is not None)
     if recorder is not None:
         recorder.close(served.ended_by, status)

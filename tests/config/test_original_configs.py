@@ -179,7 +179,7 @@ def test_arc_drive_matches_a_hand_computation(tmp_path: Path) -> None:
     assert (x, y, heading) == pytest.approx((6.6949, 32.0369, 190.0), abs=1e-4)
     assert sim.command("w0-10") == [math.inf]
     assert sim.run_until_idle()
-    assert sim.frame == 5
+    assert sim.steps == 5
     assert tuple(sim.robot.pose) == pytest.approx((x, y, heading), abs=1e-9)
     # near the true arc of radius 180/pi in (1 in per degree), 10 degrees round; each step
     # moves along its starting heading, so the path lies up to half a step's turn inside it

@@ -97,12 +97,12 @@ def test_sleep_advances_exactly_and_clock_reads_are_free() -> None:
     sim = Simulation.from_config()
     link = LocalLink(sim)
     assert link.clock("!sleep 0.1") == pytest.approx(0.1)
-    assert sim.frame == 6
+    assert sim.steps == 6
     assert [link.clock("!time") for _ in range(16)] == [pytest.approx(0.1)] * 16
-    assert sim.frame == 6  # sixteen reads in a row cost nothing
+    assert sim.steps == 6  # sixteen reads in a row cost nothing
     assert link.clock("!time") == pytest.approx(0.1 + sim.dt)  # the seventeenth moves on
     assert link.exchange("u0") == [39.5]
-    assert sim.frame == 8  # a message costs one step (the link delay)
+    assert sim.steps == 8  # a message costs one step (the link delay)
     assert link.clock("!sleep 0.01") > sim.time - 1e-9  # a fraction of a step accumulates
     assert math.isnan(link.exchange("!sleep -1")[0])
 

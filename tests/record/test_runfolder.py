@@ -81,7 +81,7 @@ def test_a_recorded_noisy_run_replays_from_its_folder_to_the_same_trace(tmp_path
     kinds = {type(event) for event in recorded}
     assert {CommandEvent, KeysEvent, PlaceEvent, ResetEvent, CollisionEvent} <= kinds
     assert isinstance(recorded[-1], StepEvent)  # the run's last step says where it stopped
-    assert recorded[-1].step == original.frame
+    assert recorded[-1].step == original.steps
 
     config, seed, events = load_run(folder)
     assert (config.settings, config.devices) == (original.config.settings, original.config.devices)
@@ -196,7 +196,7 @@ def test_the_trace_has_pose_collisions_and_each_sensors_last_reading(tmp_path: P
     assert all(a < b for a, b in itertools.pairwise(times))
     steps = [int(row["step"]) for row in rows]
     assert steps[:4] == [0, 2, 4, 6]  # 30 rows a simulated second at 60 steps a second
-    assert steps[-1] == sim.frame
+    assert steps[-1] == sim.steps
     assert int(rows[-1]["collisions"]) == sim.collisions >= 1
     last = rows[-1]
     assert [float(last[c]) for c in ("x", "y", "heading")] == pytest.approx(list(sim.robot.pose))
@@ -242,7 +242,7 @@ def test_the_report_has_the_outcome_and_the_runs_facts(tmp_path: Path) -> None:
     assert outcome["nan_replies"] == 0
     assert outcome["path_length"] == pytest.approx(114.0)
     assert outcome["final_pose"] == list(sim.robot.pose)
-    assert (report["seed"], report["steps"], report["ended_by"]) == (4, sim.frame, "closed")
+    assert (report["seed"], report["steps"], report["ended_by"]) == (4, sim.steps, "closed")
     assert report["duration"] == sim.time
     text = (folder / "report.md").read_text()
     assert "| Reached the block | yes, at " in text

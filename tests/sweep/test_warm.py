@@ -38,7 +38,7 @@ def test_reset_with_a_seed_starts_as_a_new_simulation_with_that_seed() -> None:
 
     def readings(sim: Simulation) -> list[object]:
         run_sequence(sim, LAB_SEQUENCE[:4])
-        return [sim.robot.pose, sim.command("u0,u1,u2,u3"), sim.time, sim.frame]
+        return [sim.robot.pose, sim.command("u0,u1,u2,u3"), sim.time, sim.steps]
 
     fresh = {seed: readings(Simulation(config, seed=seed)) for seed in SEEDS}
     assert len({str(values) for values in fresh.values()}) == len(SEEDS)  # the seed matters

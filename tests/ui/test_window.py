@@ -150,13 +150,13 @@ def test_space_pauses_and_period_steps(window: Window) -> None:
     assert window.bridge.local.paused
     key(pygame.K_PERIOD, unicode=".")
     tick(window)
-    assert window.bridge.sim.frame == 1
+    assert window.bridge.sim.steps == 1
     key(pygame.K_SPACE, unicode=" ")
     tick(window)
     assert not window.bridge.local.paused
     key(pygame.K_PERIOD, unicode=".")
     tick(window)
-    assert window.bridge.sim.frame == 1  # '.' only steps while paused
+    assert window.bridge.sim.steps == 1  # '.' only steps while paused
 
 
 def test_keys_act_on_the_runner(window: Window) -> None:
@@ -405,7 +405,7 @@ def test_speed_steps() -> None:
 def test_local_controls_step_once() -> None:
     sim = Simulation.from_config()
     LocalControls(sim).step_once()
-    assert sim.frame == 1
+    assert sim.steps == 1
 
 
 def test_hud_shows_the_runs_outcome(window: Window) -> None:

@@ -107,7 +107,7 @@ class Localization:
                 cut,
             )
         skipped, self.shows.dropped = self.shows.dropped, 0
-        sim.emit(BeliefEvent(sim.time, belief.to_json(), cut, skipped, sim.frame, client))
+        sim.emit(BeliefEvent(sim.time, belief.to_json(), cut, skipped, sim.steps, client))
         if belief.pose is not None:
             self.estimate(Pose(*belief.pose), client)
         return cut
@@ -117,5 +117,5 @@ class Localization:
         sim = self.sim
         if not self.estimates.take(sim.time):
             return False
-        sim.emit(EstimateEvent(sim.time, pose, sim.robot.pose, sim.frame, client))
+        sim.emit(EstimateEvent(sim.time, pose, sim.robot.pose, sim.steps, client))
         return True

@@ -501,9 +501,9 @@ class RunRecorder:
         max_bytes: int | None = None,
         on_stop: Callable[[str], None] | None = None,
     ) -> None:
-        if sim.frame != 0:
+        if sim.steps != 0:
             raise ValueError(
-                f"record a run from its start: the simulation is at step {sim.frame} "
+                f"record a run from its start: the simulation is at step {sim.steps} "
                 "(start recording before stepping it, or after sim.reset())"
             )
         self.sim = sim
@@ -526,7 +526,7 @@ class RunRecorder:
         self.trace = TraceWriter(
             self.folder / TRACE, sensor_ids(sim.config), settings.frame_rate, budget, self._stop
         )
-        self.trace.begin(sim.time, sim.frame, sim.robot.pose)
+        self.trace.begin(sim.time, sim.steps, sim.robot.pose)
         sim.add_observer(self.events)
         sim.add_observer(self.trace)
         self.closed = False
@@ -560,7 +560,7 @@ class RunRecorder:
             "seed": sim.seed,
             "clock": self.options and self.options.clock,
             "duration": sim.time,
-            "steps": sim.frame,
+            "steps": sim.steps,
             "wall_seconds": time.monotonic() - self._wall_start,
             "ended_by": ended_by,
             "program_status": program_status,

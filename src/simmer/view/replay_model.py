@@ -388,7 +388,7 @@ class Recording:
         with quiet, tempfile.TemporaryDirectory(prefix="simmer-replay-") as tmp:
             replayed_path = Path(tmp) / TRACE
             writer = TraceWriter(replayed_path, sensor_ids(config), config.settings.frame_rate)
-            writer.begin(sim.time, sim.frame, sim.robot.pose)
+            writer.begin(sim.time, sim.steps, sim.robot.pose)
             sim.add_observer(writer)
             collector = _Collector(sim, fps)
             try:

@@ -76,7 +76,7 @@ def feed(sim: Simulation, events: Iterable[Event], until_step: int | None = None
         last = max(last, event.step)
         if not isinstance(event, INPUTS + SHOWN):
             continue
-        while sim.frame < event.step:
+        while sim.steps < event.step:
             sim.step()
         if isinstance(event, SHOWN):
             sim.emit(event)  # shown again for the observers (a replay's overlay, the outcome)
@@ -95,6 +95,6 @@ def feed(sim: Simulation, events: Iterable[Event], until_step: int | None = None
             sim.reset()
             last = 0
     end = last if until_step is None else until_step
-    while sim.frame < end:
+    while sim.steps < end:
         sim.step()
     return result

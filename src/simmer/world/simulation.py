@@ -138,7 +138,7 @@ class Simulation:
             if settings.rand_bias:
                 drive.set_bias(self._draw_bias(drive))
         self._time = 0.0
-        self.frame = 0
+        self.steps = 0
         self.collisions = 0
         self.blocked_steps = 0
         self._was_blocked = False
@@ -215,7 +215,7 @@ class Simulation:
         answers = [self.execute(command) for command in commands]
         if self.observers:
             replies = tuple(answer.value for answer in answers)
-            self.emit(CommandEvent(self._time, message, replies, self.frame, client))
+            self.emit(CommandEvent(self._time, message, replies, self.steps, client))
         return answers
 
     def _warn_lenient(self, command: Command) -> None:
@@ -316,8 +316,8 @@ class Simulation:
                     moved = True
         if moved:
             self._move(dx, dy, rotation)
-        self._time = (self.frame + 1) * dt
-        self.frame += 1
+        self._time = (self.steps + 1) * dt
+        self.steps += 1
         # A try costs nothing until it catches (Python >= 3.11), and switching a device off
         # builds new lists, so these loops go on over the old ones.
         for device in self._updating:
@@ -333,7 +333,7 @@ class Simulation:
             except DEVICE_FAULTS as exc:
                 self._switch_off(device, "simulate() for simulate_list", exc)
         if self.observers:
-            self.emit(StepEvent(self._time, robot.pose, self.frame))
+            self.emit(StepEvent(self._time, robot.pose, self.steps))
 
     # ----------------------------------------------------------------- faulty devices
 
@@ -390,12 +390,12 @@ class Simulation:
                 self.collisions += 1
                 self._was_blocked = True
                 if self.observers:
-                    self.emit(CollisionEvent(self._time, pose, self.frame))
+                    self.emit(CollisionEvent(self._time, pose, self.steps))
             return
         if self._was_blocked:
             self._was_blocked = False
             if self.observers:
-                self.emit(CollisionEndEvent(self._time, target, self.frame))
+                self.emit(CollisionEndEvent(self._time, target, self.steps))
         robot.pose = target
         robot.turned = rotation
         block = self._block
@@ -441,7 +441,7 @@ class Simulation:
         if unknown:
             raise ValueError(f"manual keys are {MANUAL_KEYS}, not {''.join(sorted(unknown))}")
         if held != self.manual_keys and self.observers:
-            self.emit(KeysEvent(self._time, held, self.frame))
+            self.emit(KeysEvent(self._time, held, self.steps))
         self.manual_keys = held
 
     def _manual_motion(self, dt: float) -> tuple[float, float, float]:
@@ -463,7 +463,7 @@ class Simulation:
         if self._block.held is not None:  # _blocked placed its outline at the pose
             self._block.carry_to(self._block.carried_pose(pose), self._carried)
         if self.observers:
-            self.emit(PlaceEvent(self._time, robot.pose, self.frame))
+            self.emit(PlaceEvent(self._time, robot.pose, self.steps))
         return True
 
     # ----------------------------------------------------------------- lifecycle
@@ -476,7 +476,7 @@ class Simulation:
         reset's event does not carry the seed: change it before recording, not during.)"""
         if self._owner is not None:
             self._check_thread("reset")
-        time, step = self._time, self.frame  # the event says when it was asked for
+        time, step = self._time, self.steps  # the event says when it was asked for
         if seed is not None:
             self.seed = seed
         self._build()
