@@ -1,4 +1,4 @@
-"""The interactive console (``simmer console``): its own help."""
+"""The interactive console (``simmer console``): its own help, and why a reply is NaN."""
 
 from __future__ import annotations
 
@@ -15,11 +15,8 @@ def test_console_answers_help_itself() -> None:
     sim = Simulation.from_config()
     seen: list[Event] = []
     sim.add_observer(seen.append)
-    with serving(sim) as (_, link):
-        from simmer.client import connect
-
-        with connect(port=link.stream.port) as client:
-            run_console(client, read=lambda _: next(lines), echo=shown.append, history=False)
+    with serving(sim) as (_, link), connect(port=link.stream.port) as client:
+        run_console(client, read=lambda _: next(lines), echo=shown.append, history=False)
     assert shown[:3] == [HELP, HELP, HELP]
     commands = [e.message for e in seen if isinstance(e, CommandEvent)]
     assert commands == ["u0"]  # help never reached the simulator

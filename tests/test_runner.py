@@ -1,4 +1,6 @@
-"""The simulation loop: it alone touches the simulation, serves the bus, steps, pauses."""
+"""The simulation loop: it alone touches the simulation, serves the bus, steps, pauses; a
+request that fails fails alone, its NaN reasons travel with it, and a client's bad commands
+take a bounded number of log lines."""
 
 from __future__ import annotations
 
@@ -13,10 +15,7 @@ import pytest
 from link_support import closed_by_server, read_frame, serving, stream, two_port_send
 from simmer.config import load_config
 from simmer.errors import BusClosed, WrongThread
-from simmer.protocol import (
-    MAX_COMMANDS,
-    Decoded,
-)
+from simmer.protocol import MAX_COMMANDS, Decoded
 from simmer.runner import LOG_LINES_PER_SECOND, Runner, _LogBudget
 from simmer.transport import CommandBus
 from simmer.transport.bus import Reply, Request

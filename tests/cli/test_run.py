@@ -15,9 +15,7 @@ from link_support import free_port
 from simmer.cli import app
 from simmer.config import load_config, summarize, with_settings
 
-from helpers import (
-    EXAMPLES,
-)
+from helpers import EXAMPLES
 
 
 def test_the_start_up_summary_shows_the_ports_in_use() -> None:

@@ -1,6 +1,7 @@
 """A run folder (issue 11, item 1): manifest, events, trace and report of a run, recorded from
 Python and by ``simmer run --record``; a recorded noisy run replays from its folder to the same
-trace, and a run killed with SIGKILL leaves an events.jsonl whose every line parses."""
+trace, and a run killed with SIGKILL leaves an events.jsonl whose every line parses;
+report.md defines its terms and takes only well-formed project lines."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """The virtual serial port: a real pseudo-terminal driven with pyserial, as a robot program
-would drive the Arduino's Bluetooth port."""
+would drive the Arduino's Bluetooth port; a message that fails keeps the port, and the link
+path never replaces what SimMeR did not create."""
 
 from __future__ import annotations
 
@@ -14,10 +15,7 @@ import serial
 
 from link_support import LONG_SILENCE, loop, serving
 from simmer.errors import SimmerError
-from simmer.protocol import (
-    Decoded,
-    PackedCodec,
-)
+from simmer.protocol import Decoded, PackedCodec
 from simmer.runner import Runner
 from simmer.transport import CommandBus, SerialServer
 from simmer.world import Simulation

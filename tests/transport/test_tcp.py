@@ -1,5 +1,8 @@
 """The TCP transports over real loopback sockets: SimMeR's two-port scheme and the persistent
-stream protocol, with every bad input the issue lists."""
+stream protocol, with every bad input the issue lists, and what keeps one client from stopping
+or starving the others (a failing connection, huge lines, replies nobody collects, running out
+of descriptors, clients that never read or never finish a line, idle clients); ``?`` says why
+a reply was NaN."""
 
 from __future__ import annotations
 
@@ -32,10 +35,7 @@ from link_support import (
     unpack,
 )
 from simmer.client import connect
-from simmer.protocol import (
-    FRAME_HEADER,
-    MAX_MESSAGE_BYTES,
-)
+from simmer.protocol import FRAME_HEADER, MAX_MESSAGE_BYTES
 from simmer.runner import Runner
 from simmer.transport import CommandBus, StreamServer, Transports
 from simmer.transport.tcp import ACCEPT_BACKOFF, MAX_IN_FLIGHT, MAX_UNCLAIMED, RECV_SIZE

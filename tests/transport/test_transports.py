@@ -10,9 +10,7 @@ import pytest
 import serial
 
 from link_support import read_frame, serving, stream, two_port_send
-from simmer.protocol import (
-    MAX_COMMANDS,
-)
+from simmer.protocol import MAX_COMMANDS
 
 pytestmark = pytest.mark.timeout(60)
 

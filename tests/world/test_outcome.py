@@ -1,5 +1,6 @@
 """The run's outcome, worked out from the simulation's events: Task 2 time, collisions, path,
-commands and NaN replies, reset, placing the robot by hand, plain data."""
+commands and NaN replies, reset, placing the robot by hand, plain data; the project's
+milestones and score."""
 
 from __future__ import annotations
 
