@@ -415,12 +415,7 @@ class Runner:
             request = self.bus.get()
             if request is None:
                 break
-            try:
-                self.handle(request)
-            except Exception as exc:
-                log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
-                if not request.future.done():
-                    request.future.set_exception(exc)
+            self._answer(request)
             served += 1
         if self._held:
             self._release()
@@ -428,6 +423,18 @@ class Runner:
             self._log.flush()
         self._settle()
         return served
+
+    def _answer(self, request: Request) -> bool:
+        """:meth:`handle` a request; one whose handling raises gets the exception instead of
+        replies, and the loop goes on. True if nothing waits for the loop's attention after
+        it (a clock message, log lines held back): the bus may go on waiting."""
+        try:
+            self.handle(request)
+        except Exception as exc:
+            log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
+            if not request.future.done():
+                request.future.set_exception(exc)
+        return not (self._waits or self._held or self._log.holding)
 
     def run(
         self,
@@ -443,9 +450,12 @@ class Runner:
         every request between two steps.
         """
         self.sim.own(threading.get_ident())
+        if not self.lockstep:  # lockstep takes one request at a time, between steps
+            self.bus.answer_with(self._answer)
         try:
             self._run(on_frame, stop_event, until)
         finally:
+            self.bus.answer_with(None)
             self.sim.own(None)
 
     def _run(

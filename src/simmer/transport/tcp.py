@@ -80,6 +80,11 @@ GRACE = 1 / 60
 """Seconds a two-port reply connection with nothing to collect waits for a message whose
 connection was accepted before it and is still arriving (one step at 60 Hz), before it is
 closed empty as the original closed it; 0 under the lockstep clock."""
+REMEMBERED = 256
+"""Persistent-protocol lines whose decoding is kept (forgotten all at once past it): a
+program's repeated messages (``u0``, ``w0-6``) then cost no decoding."""
+REMEMBERED_BYTES = 128
+"""Longest line (with its ``\\n``) whose decoding is kept, so what is kept stays small."""
 _OUT_OF_RESOURCES = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
 
 
@@ -630,6 +635,24 @@ class StreamServer(_Server):
         self.encoding = encoding
         self.lenient = lenient
         """Parse commands the original SimMeR's way (a run of an original ``config.py``)."""
+        self.remembered: dict[bytes, Decoded] = {}
+
+    def decode(self, line: bytes) -> Decoded:
+        """Decode a line (without its ``\\n``) and parse its commands; the decodings of the
+        last :data:`REMEMBERED` short lines are kept, as a program sends the same few
+        messages again and again (a :class:`Decoded` is immutable)."""
+        decoded = self.remembered.get(line)
+        if decoded is None:
+            clock = line.startswith(CLOCK_PREFIX)
+            size = len(line) + 1
+            decoded = decode_message(
+                line, self.encoding, size=size, clock=clock, lenient=self.lenient
+            )
+            if size <= REMEMBERED_BYTES:
+                if len(self.remembered) >= REMEMBERED:
+                    self.remembered.clear()
+                self.remembered[line] = decoded
+        return decoded
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A persistent connection, listed among the bus's clients while open."""
@@ -662,6 +685,7 @@ class _StreamConnection(_Connection):
         self.messages = 0
         self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
         self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
+        self.pumping = False  # in :meth:`pump` (a reply sent meanwhile leaves the lines to it)
 
     def reading(self) -> bool:
         """Read while the connection may have more in flight."""
@@ -678,7 +702,10 @@ class _StreamConnection(_Connection):
         self.pump()
 
     def drained(self) -> None:
-        """Every reply is sent: take the next lines (if any came meanwhile)."""
+        """Every reply is sent: take the next lines (if any came meanwhile; a reply sent
+        while :meth:`pump` runs leaves them to its loop)."""
+        if self.pumping:
+            return
         if self.inbox:
             self.pump()
         else:
@@ -686,15 +713,26 @@ class _StreamConnection(_Connection):
 
     def pump(self) -> None:
         """Submit complete lines while allowed (see the class doc); a line over the size
-        limit gets one NaN and ends the connection."""
+        limit gets one NaN and ends the connection. The first line, if nothing of this
+        connection is in flight, is answered at once when the loop can (:meth:`submit`)."""
+        self.pumping = True
+        try:
+            self._pump()
+        finally:
+            self.pumping = False
+        self.rearm()
+        self.update_events()
+
+    def _pump(self) -> None:
         inbox = self.inbox
+        now = True  # the first message only: one client cannot keep the loop to itself
         while not (self.closed or self.ended or self.outbox) and self.in_flight < MAX_IN_FLIGHT:
             end = inbox.find(b"\n", self.searched)
             if end < 0:
                 self.searched = len(inbox)
                 if len(inbox) > MAX_MESSAGE_BYTES:
                     reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)))
+                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)), now)
                     inbox.clear()
                 break
             line = bytes(inbox[:end])
@@ -705,16 +743,10 @@ class _StreamConnection(_Connection):
                 self.server.bus.took(end + 1)
                 self.explain_later()
             elif line.startswith(META_PREFIX):
-                self.submit(decode_meta(line, end + 1))
+                self.submit(decode_meta(line, end + 1), now)
             else:
-                stream = self.stream
-                clock = line.startswith(CLOCK_PREFIX)
-                decoded = decode_message(
-                    line, stream.encoding, size=end + 1, clock=clock, lenient=stream.lenient
-                )
-                self.submit(decoded)
-        self.rearm()
-        self.update_events()
+                self.submit(self.stream.decode(line), now)
+            now = False
 
     def rearm(self) -> None:
         """Set the deadline while the client owes us something: ``timeout`` before its first
@@ -732,12 +764,15 @@ class _StreamConnection(_Connection):
             self.deadline = None if limit is None else time.monotonic() + limit
         self.waiting_for = kind
 
-    def submit(self, decoded: Decoded) -> None:
-        """Queue one message; its frame is sent as soon as the loop has answered it."""
+    def submit(self, decoded: Decoded, now: bool = False) -> None:
+        """Queue one message; its frame is sent as soon as the loop has answered it. With
+        ``now``, and nothing of this connection in flight (frames go out in order), the loop
+        may answer it before this returns (:meth:`CommandBus.request`)."""
         if decoded.over_limit:
             self.ended = True
+        now = now and not self.in_flight
         self.in_flight += decoded.count
-        request = self.server.bus.request(decoded, self.client)
+        request = self.server.bus.request(decoded, self.client, now=now)
         self.latest = request.future
         if self.ended:
             self.last = request.future
