@@ -32,7 +32,6 @@ from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, pr
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
-from simmer.world.simulation import Answer
 
 log = logging.getLogger("simmer.runner")
 
@@ -232,7 +231,8 @@ class Runner:
             commands = decoded.commands or self.sim.parse(decoded.text)
             answers = self.sim.answer(commands, decoded.text, request.client)
             replies = [answer.value for answer in answers]
-            self._report(printable(request.client), answers, request.reasons)
+            if records := [(a.level, a.why) for a in answers if a.why is not None]:
+                self._report(printable(request.client), records, request.reasons)
         request.future.set_result(replies)
         return replies
 
@@ -380,11 +380,10 @@ class Runner:
                 waiting.append(wait)
         self._waits = waiting
 
-    def _report(self, client: str, answers: list[Answer], reasons: list[str]) -> None:
-        """Log why the first few NaN answers of one message are NaN and count the rest (and
-        no more than the client's budget, :class:`_LogBudget`); keep the first
-        :data:`MAX_REASONS` for the client."""
-        records = [(a.level, a.why) for a in answers if a.why is not None]
+    def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
+        """Log why the first few NaN answers of one message are NaN (``records``: level and
+        why) and count the rest (and no more than the client's budget, :class:`_LogBudget`);
+        keep the first :data:`MAX_REASONS` for the client."""
         for level, text in records[:MAX_LOGGED]:
             self._log.log(client, level, "%s: %s", client, text)
         more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])

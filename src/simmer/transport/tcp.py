@@ -715,17 +715,9 @@ class _StreamConnection(_Connection):
         """Submit complete lines while allowed (see the class doc); a line over the size
         limit gets one NaN and ends the connection. The first line, if nothing of this
         connection is in flight, is answered at once when the loop can (:meth:`submit`)."""
-        self.pumping = True
-        try:
-            self._pump()
-        finally:
-            self.pumping = False
-        self.rearm()
-        self.update_events()
-
-    def _pump(self) -> None:
         inbox = self.inbox
         now = True  # the first message only: one client cannot keep the loop to itself
+        self.pumping = True
         while not (self.closed or self.ended or self.outbox) and self.in_flight < MAX_IN_FLIGHT:
             end = inbox.find(b"\n", self.searched)
             if end < 0:
@@ -747,6 +739,9 @@ class _StreamConnection(_Connection):
             else:
                 self.submit(self.stream.decode(line), now)
             now = False
+        self.pumping = False
+        self.rearm()
+        self.update_events()
 
     def rearm(self) -> None:
         """Set the deadline while the client owes us something: ``timeout`` before its first
@@ -776,7 +771,11 @@ class _StreamConnection(_Connection):
         self.latest = request.future
         if self.ended:
             self.last = request.future
-        request.future.add_done_callback(lambda _future: self.guard(lambda: self.reply(request)))
+        answer = functools.partial(self.guard, functools.partial(self.reply, request))
+        if request.future.done():  # answered at once
+            answer()
+        else:
+            request.future.add_done_callback(lambda _future: answer())
 
     def reply(self, request: Request) -> None:
         """Loop thread (or a closing bus): send the reply frame; futures complete in order.
