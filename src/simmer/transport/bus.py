@@ -30,10 +30,13 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from simmer.errors import BusClosed
 from simmer.protocol import Decoded
+
+if TYPE_CHECKING:
+    from _typeshed import FileDescriptorLike
 
 log = logging.getLogger("simmer.transport")
 
@@ -190,6 +193,9 @@ class CommandBus:
         os.set_blocking(self._wake_r, False)
         os.set_blocking(self._wake_w, False)
         self._selector.register(self._wake_r, selectors.EVENT_READ)
+        self._keys: dict[int, selectors.SelectorKey] = {}
+        """Each watched socket's key by descriptor, as the selector has it (its own map costs
+        four calls a look-up, and the loop looks one up per ready socket)."""
         self._release = weakref.finalize(self, _release, self._selector, self._wake_r, self._wake_w)
 
     def submit(self, message: Decoded | str, client: str) -> Reply[list[float]]:
@@ -291,13 +297,16 @@ class CommandBus:
         loop for every message; a request queued, a wake-up, or an answer that leaves the
         loop something to do ends the wait."""
         end = time.monotonic() + max(timeout, 0.0)
+        timers = self._timers
         while True:
-            timeout = 0.0 if not self._queue.empty() else max(end - time.monotonic(), 0.0)
-            with self._timer_lock:
-                if self._timers:
-                    timeout = min(timeout, max(0.0, self._timers[0][0] - time.monotonic()))
+            now = time.monotonic()
+            timeout = 0.0 if not self._queue.empty() else end - now
+            if timers:
+                with self._timer_lock:
+                    if timers:
+                        timeout = min(timeout, timers[0][0] - now)
             try:
-                ready = self._selector.select(timeout)
+                ready = self._selector.select(max(timeout, 0.0))
             except ValueError:  # closed by another thread meanwhile
                 if self._closed:
                     return
@@ -308,10 +317,12 @@ class CommandBus:
                 woken = self._dispatch(ready)
             finally:
                 self._waiting = 0
-            self._run_timers()
+            now = time.monotonic()
+            if timers:
+                self._run_timers(now)
             if woken or not (ready and self._calm and self._queue.empty()):
                 return
-            if time.monotonic() >= end or self._closed:
+            if now >= end or self._closed:
                 return
 
     def _dispatch(self, ready: list[tuple[selectors.SelectorKey, int]]) -> bool:
@@ -326,22 +337,23 @@ class CommandBus:
                         pass
                 continue
             with self._watch_lock:
-                if self._closed or self._selector.get_map().get(key.fd) is not key:
+                if self._closed or self._keys.get(key.fd) is not key:
                     continue  # unwatched meanwhile
                 callback, on_error = key.data
                 try:
                     keep = callback(events)
                 except Exception as exc:
-                    self._unregister(key)
+                    self._unregister(key.fileobj)
                     self._failed(on_error, exc)
                     continue
                 if not keep:
-                    self._unregister(key)
+                    self._unregister(key.fileobj)
         return woken
 
-    def _unregister(self, key: selectors.SelectorKey) -> None:
+    def _unregister(self, sock: FileDescriptorLike) -> None:
+        """Stop watching ``sock`` (caller holds ``_watch_lock``); no error if it is not."""
         with contextlib.suppress(KeyError, ValueError):  # it may have unwatched itself
-            self._selector.unregister(key.fileobj)
+            self._keys.pop(self._selector.unregister(sock).fd, None)
 
     @staticmethod
     def _failed(on_error: ErrorHandler | None, exc: Exception) -> None:
@@ -367,10 +379,11 @@ class CommandBus:
         with self._watch_lock:
             if self._closed:
                 raise BusClosed("the simulation has stopped")
-            if sock.fileno() in self._selector.get_map():
-                self._selector.modify(sock, events, (callback, on_error))
+            if sock.fileno() in self._keys:
+                key = self._selector.modify(sock, events, (callback, on_error))
             else:
-                self._selector.register(sock, events, (callback, on_error))
+                key = self._selector.register(sock, events, (callback, on_error))
+            self._keys[key.fd] = key
 
     def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
         """Run ``callback()`` in the loop thread after ``delay`` s (any thread may ask)."""
@@ -384,9 +397,8 @@ class CommandBus:
             self._wake()
         return timer
 
-    def _run_timers(self) -> None:
-        """Loop thread: run the timers that are due; one that raises is logged."""
-        now = time.monotonic()
+    def _run_timers(self, now: float) -> None:
+        """Loop thread: run the timers due at ``now``; one that raises is logged."""
         while True:
             with self._timer_lock:
                 if not self._timers or self._timers[0][0] > now:
@@ -403,8 +415,7 @@ class CommandBus:
         """Stop watching ``sock``; once this returns its callback is not running and won't run."""
         with self._watch_lock:
             if not self._closed:
-                with contextlib.suppress(KeyError, ValueError):
-                    self._selector.unregister(sock)
+                self._unregister(sock)
 
     def close(self) -> None:
         """Refuse new messages, fail the queued ones with :class:`BusClosed`, stop watching."""

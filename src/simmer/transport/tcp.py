@@ -143,23 +143,29 @@ class _Connection:
         """Everything queued has been sent (subclasses may take more input now)."""
 
     def send(self, data: bytes) -> None:
-        """Queue bytes and send what the socket takes now."""
-        self.outbox += data
-        self.flush()
+        """Send what the socket takes now; queue the rest."""
+        if self.outbox:
+            self.outbox += data
+            data = b""
+        self.flush(data)
 
-    def flush(self) -> None:
-        """Send what the socket takes; watch for writability while anything is left."""
+    def flush(self, data: bytes = b"") -> None:
+        """Send what the socket takes (what is queued, or else ``data``, whose rest is queued);
+        watch for writability while anything is left."""
         if self.closed:
             return
-        if self.outbox:
+        if data or self.outbox:
             try:
-                sent = self.conn.send(self.outbox)
+                sent = self.conn.send(data or self.outbox)
             except BlockingIOError:
                 sent = 0
             except OSError:  # the client has gone
                 self.close()
                 return
-            del self.outbox[:sent]
+            if data:
+                self.outbox += data[sent:]
+            else:
+                del self.outbox[:sent]
         if not self.outbox:
             if self.close_when_sent:
                 self.close()
@@ -731,7 +737,7 @@ class _StreamConnection(_Connection):
             del inbox[: end + 1]
             self.searched = 0
             self.messages += 1
-            if line.rstrip(b"\r") == EXPLAIN:
+            if line in (EXPLAIN, EXPLAIN + b"\r"):
                 self.server.bus.took(end + 1)
                 self.explain_later()
             elif line.startswith(META_PREFIX):
@@ -771,11 +777,15 @@ class _StreamConnection(_Connection):
         self.latest = request.future
         if self.ended:
             self.last = request.future
-        answer = functools.partial(self.guard, functools.partial(self.reply, request))
-        if request.future.done():  # answered at once
-            answer()
-        else:
-            request.future.add_done_callback(lambda _future: answer())
+        if not request.future.done():
+            request.future.add_done_callback(
+                lambda _future: self.guard(functools.partial(self.reply, request))
+            )
+            return
+        try:  # answered at once
+            self.reply(request)
+        except Exception as exc:
+            self.failed(exc)
 
     def reply(self, request: Request) -> None:
         """Loop thread (or a closing bus): send the reply frame; futures complete in order.
