@@ -414,7 +414,7 @@ class Runner:
             request = self.bus.get()
             if request is None:
                 break
-            self._answer(request)
+            self.answer(request)
             served += 1
         if self._held:
             self._release()
@@ -423,7 +423,7 @@ class Runner:
         self._settle()
         return served
 
-    def _answer(self, request: Request) -> bool:
+    def answer(self, request: Request) -> bool:
         """:meth:`handle` a request; one whose handling raises gets the exception instead of
         replies, and the loop goes on. True if nothing waits for the loop's attention after
         it (a clock message, log lines held back): the bus may go on waiting."""
@@ -450,7 +450,7 @@ class Runner:
         """
         self.sim.own(threading.get_ident())
         if not self.lockstep:  # lockstep takes one request at a time, between steps
-            self.bus.answer_with(self._answer)
+            self.bus.answer_with(self.answer)
         try:
             self._run(on_frame, stop_event, until)
         finally:
