@@ -686,7 +686,10 @@ class _StreamConnection(_Connection):
         self.searched = 0
         self.ended = False  # a message over a limit: no more input; close after its reply
         self.last: Reply[list[float]] | None = None
-        self.latest: Reply[list[float]] | None = None  # the last message submitted
+        self.owed: deque[Request | None] = deque()
+        """The messages not yet answered on the wire, in the order they came (None: a ``?``):
+        frames go out from the front only, so a clock message answered later holds back
+        the frames of the messages after it."""
         self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
         self.messages = 0
         self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
@@ -766,30 +769,34 @@ class _StreamConnection(_Connection):
         self.waiting_for = kind
 
     def submit(self, decoded: Decoded, now: bool = False) -> None:
-        """Queue one message; its frame is sent as soon as the loop has answered it. With
-        ``now``, and nothing of this connection in flight (frames go out in order), the loop
-        may answer it before this returns (:meth:`CommandBus.request`)."""
+        """Queue one message; its frame is sent once the loop has answered it and every
+        message before it. With ``now`` the loop may answer it before this returns
+        (:meth:`CommandBus.request`)."""
         if decoded.over_limit:
             self.ended = True
-        now = now and not self.in_flight
         self.in_flight += decoded.count
         request = self.server.bus.request(decoded, self.client, now=now)
-        self.latest = request.future
         if self.ended:
             self.last = request.future
-        if not request.future.done():
-            request.future.add_done_callback(
-                lambda _future: self.guard(functools.partial(self.reply, request))
-            )
-            return
-        try:  # answered at once
-            self.reply(request)
-        except Exception as exc:
-            self.failed(exc)
+        self.owed.append(request)
+        if request.future.done():  # answered at once
+            self.send_answered()
+        else:
+            request.future.add_done_callback(lambda _future: self.guard(self.send_answered))
+
+    def send_answered(self) -> None:
+        """Send the frames of the answered messages at the front of :attr:`owed`."""
+        owed = self.owed
+        while owed and (owed[0] is None or owed[0].future.done()):
+            request = owed.popleft()
+            if request is None:
+                self.explain()
+            else:
+                self.reply(request)
 
     def reply(self, request: Request) -> None:
-        """Loop thread (or a closing bus): send the reply frame; futures complete in order.
-        A frame is checked before it goes: more values than a message may have (none should)
+        """Loop thread (or a closing bus): send the reply frame of an answered message. A
+        frame is checked before it goes: more values than a message may have (none should)
         become one NaN and the end of the connection."""
         self.in_flight -= request.decoded.count
         if self.closed:
@@ -813,12 +820,10 @@ class _StreamConnection(_Connection):
         self.send(frame_replies(values, width))
 
     def explain_later(self) -> None:
-        """Answer ``?`` once the message before it is answered (frames go out in order)."""
+        """Answer ``?`` once the messages before it are answered (frames go out in order)."""
         self.in_flight += 1
-        if self.latest is None:
-            self.explain()
-        else:
-            self.latest.add_done_callback(lambda _future: self.guard(self.explain))
+        self.owed.append(None)
+        self.send_answered()
 
     def explain(self) -> None:
         """Send the reasons of the last answered message as a text frame."""
