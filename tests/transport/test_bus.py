@@ -86,17 +86,21 @@ def test_a_request_asked_now_never_overtakes_one_queued_before_it(bus: CommandBu
         theirs.sendall(b"u0\n")
         select.select([ours], [], [], DEADLINE)
         bus.wait(DEADLINE)  # ends at once: a request is queued
-    assert len(asked) == 1 and not asked[0].future.done()
+    assert len(asked) == 1
+    assert not asked[0].future.done()
     queued = [bus.get(), bus.get()]
-    assert queued[0] is not None and queued[0].future is first
-    assert queued[1] is asked[0] and bus.get() is None
+    assert queued[0] is not None
+    assert queued[0].future is first
+    assert queued[1] is asked[0]
+    assert bus.get() is None
 
 
 def test_now_is_only_honoured_in_the_loops_callbacks_and_with_an_answerer(
     bus: CommandBus,
 ) -> None:
     request = bus.request("u0", "client", now=True)  # this thread is not in the loop's wait
-    assert not request.future.done() and bus.queued == 1
+    assert not request.future.done()
+    assert bus.queued == 1
     bus.get()
     ours, theirs = socket.socketpair()  # in a callback, but nobody answers at once
     asked: list[Request] = []
@@ -110,7 +114,8 @@ def test_now_is_only_honoured_in_the_loops_callbacks_and_with_an_answerer(
         bus.watch(ours, ready, selectors.EVENT_READ)
         theirs.sendall(b"u0\n")
         bus.wait(DEADLINE)
-    assert not asked[0].future.done() and bus.queued == 1
+    assert not asked[0].future.done()
+    assert bus.queued == 1
 
 
 @contextmanager
@@ -140,7 +145,8 @@ def test_the_wait_goes_on_while_callbacks_only_answer(bus: CommandBus) -> None:
     bus.answer_with(answered(1.0, calm=True))
     with rearming(bus, stop_after=3) as asked:
         bus.wait(DEADLINE)  # one wait: three messages answered, then one queued ends it
-    assert len(asked) == 3 and all(r.future.done() for r in asked)
+    assert len(asked) == 3
+    assert all(r.future.done() for r in asked)
     assert bus.queued == 1
 
 
@@ -245,7 +251,9 @@ def test_a_pipeline_is_answered_in_order_the_first_line_at_once(loop: Loop) -> N
     assert loop.handled == ["zz", "w0-0", "u0"]
     assert served == 2  # the first at once, the rest through the queue (one client's turn)
     nan, stop, reading = (read_frame(loop.client) for _ in range(3))
-    assert math.isnan(nan[0]) and stop == [math.inf] and 0 < reading[0] < 433
+    assert math.isnan(nan[0])
+    assert stop == [math.inf]
+    assert 0 < reading[0] < 433
 
 
 def read_text(sock: socket.socket) -> str:
@@ -297,9 +305,11 @@ def test_a_clock_message_answered_at_once_is_settled_by_the_loop(loop: Loop) -> 
 def test_answer_says_whether_the_loop_has_work_left() -> None:
     runner = Runner(make_sim(), speed=1.0)
     plain = Request(Decoded("u0", 1, size=3, commands=runner.sim.parse("u0")), "client")
-    assert runner.answer(plain) is True and plain.future.result()[0] > 0
+    assert runner.answer(plain) is True
+    assert plain.future.result()[0] > 0
     clock = Request(Decoded("!sleep 1", 1, size=9, clock=True), "client")
-    assert runner.answer(clock) is False and not clock.future.done()
+    assert runner.answer(clock) is False
+    assert not clock.future.done()
 
 
 # ------------------------------------------------------------------- decodings kept
@@ -310,7 +320,8 @@ def test_repeated_lines_decode_once_and_what_is_kept_is_bounded(bus: CommandBus)
     with server:
         first = server.decode(b"u0,w0-6")
         assert server.decode(b"u0,w0-6") is first
-        assert first.size == len(b"u0,w0-6\n") and first.count == 2
+        assert first.size == len(b"u0,w0-6\n")
+        assert first.count == 2
         long = b"u0," * REMEMBERED_BYTES
         assert server.decode(long).count == REMEMBERED_BYTES + 1
         assert long not in server.remembered
