@@ -778,8 +778,11 @@ class _StreamConnection(_Connection):
         request = self.server.bus.request(decoded, self.client, now=now)
         if self.ended:
             self.last = request.future
+        if request.future.done() and not self.owed:  # answered at once, nothing before it
+            self.reply(request)
+            return
         self.owed.append(request)
-        if request.future.done():  # answered at once
+        if request.future.done():
             self.send_answered()
         else:
             request.future.add_done_callback(lambda _future: self.guard(self.send_answered))
