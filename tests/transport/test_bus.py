@@ -337,3 +337,44 @@ def test_a_lenient_server_keeps_its_own_decodings(bus: CommandBus) -> None:
     with strict, lenient:
         assert strict.decode(b"w0x6").commands[0].error is not None
         assert lenient.decode(b"w0x6").commands[0].value == 6
+
+
+# ------------------------------------------------------------- the loop thread decides
+
+
+@pytest.mark.parametrize("lockstep", [False, True])
+def test_the_loop_answers_in_callbacks_in_real_time_and_never_in_lockstep(lockstep: bool) -> None:
+    """In real time the loop hands the bus its way to answer at once; in lockstep it takes one
+    request at a time between steps, so nothing is answered inside the bus's wait."""
+    runner = Runner(make_sim(), speed=None if lockstep else 1.0, lockstep=lockstep)
+    inside: list[bool] = []
+    waiting = threading.local()
+    wait, handle = runner.bus.wait, runner.handle
+
+    def watched_wait(timeout: float) -> None:
+        waiting.now = True
+        try:
+            wait(timeout)
+        finally:
+            waiting.now = False
+
+    def recording(request: Request) -> list[float]:
+        inside.append(getattr(waiting, "now", False))
+        return handle(request)
+
+    runner.bus.wait = watched_wait  # type: ignore[method-assign]
+    runner.handle = recording  # type: ignore[method-assign]
+    stop = threading.Event()
+    thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})
+    with StreamServer(runner.bus, port=0) as server:
+        thread.start()
+        try:
+            with socket.create_connection(("127.0.0.1", server.port), timeout=DEADLINE) as sock:
+                for _ in range(3):
+                    sock.sendall(b"w0-0\n")
+                    assert read_frame(sock) == [math.inf]
+        finally:
+            stop.set()
+            thread.join()
+            runner.bus.close()
+    assert inside == [not lockstep] * 3
