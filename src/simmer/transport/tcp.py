@@ -722,10 +722,10 @@ class _StreamConnection(_Connection):
 
     def pump(self) -> None:
         """Submit complete lines while allowed (see the class doc); a line over the size
-        limit gets one NaN and ends the connection. The first line, if nothing of this
-        connection is in flight, is answered at once when the loop can (:meth:`submit`)."""
+        limit gets one NaN and ends the connection. The first line may be answered at once
+        (:meth:`submit`); the rest wait for the loop's next turn, as other clients' do."""
         inbox = self.inbox
-        now = True  # the first message only: one client cannot keep the loop to itself
+        now = True  # the first line only: one client cannot keep the loop to itself
         self.pumping = True
         while not (self.closed or self.ended or self.outbox) and self.in_flight < MAX_IN_FLIGHT:
             end = inbox.find(b"\n", self.searched)
