@@ -238,7 +238,12 @@ def raw_clients(port: int, clients: int, rounds: int) -> dict[str, float]:
 def versus_echo(rounds: int = 3000) -> dict[str, float]:
     """The persistent protocol against the bare echo, measured in turn in the same run (best
     of :data:`REPEATS` each): the round-trip ratio with one client, the fraction of the
-    echo's queries/s with eight; and the same for :data:`FLOOR_SERVER`."""
+    echo's queries/s with eight; and the same for :data:`FLOOR_SERVER`.
+
+    On this virtual machine (cpuidle driver ``haltpoll``) a round trip takes ~15 us while the
+    waiting CPU is still polling and ~50 us once it has halted, and the poll window adapts to
+    recent wake-ups, so one run can measure the echo in one regime and a server in the other;
+    a floor ratio far from ~1.3 says the run was disturbed so."""
     best: dict[str, dict[int, dict[str, float]]] = {"echo": {}, "floor": {}, "simmer": {}}
     with (
         echo_server() as echo_port,
