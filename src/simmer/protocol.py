@@ -272,7 +272,8 @@ def frame_replies(values: Sequence[float], width: int = 4) -> bytes:
     for more values than the header's count can say."""
     if len(values) > MAX_FRAME_COUNT:
         raise ValueError(f"{len(values)} values do not fit a frame (at most {MAX_FRAME_COUNT})")
-    return FRAME_HEADER.pack(width, len(values)) + pack_replies(values, width)
+    count = len(values)
+    return struct.pack(f"<BH{count}{REPLY_FORMATS[width][1]}", width, count, *values)
 
 
 def frame_text(text: str) -> bytes:

@@ -32,7 +32,6 @@ from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, pr
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
-from simmer.world.simulation import Answer
 
 log = logging.getLogger("simmer.runner")
 
@@ -232,7 +231,8 @@ class Runner:
             commands = decoded.commands or self.sim.parse(decoded.text)
             answers = self.sim.answer(commands, decoded.text, request.client)
             replies = [answer.value for answer in answers]
-            self._report(printable(request.client), answers, request.reasons)
+            if records := [(a.level, a.why) for a in answers if a.why is not None]:
+                self._report(printable(request.client), records, request.reasons)
         request.future.set_result(replies)
         return replies
 
@@ -380,11 +380,10 @@ class Runner:
                 waiting.append(wait)
         self._waits = waiting
 
-    def _report(self, client: str, answers: list[Answer], reasons: list[str]) -> None:
-        """Log why the first few NaN answers of one message are NaN and count the rest (and
-        no more than the client's budget, :class:`_LogBudget`); keep the first
-        :data:`MAX_REASONS` for the client."""
-        records = [(a.level, a.why) for a in answers if a.why is not None]
+    def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
+        """Log why the first few NaN answers of one message are NaN (``records``: level and
+        why) and count the rest (and no more than the client's budget, :class:`_LogBudget`);
+        keep the first :data:`MAX_REASONS` for the client."""
         for level, text in records[:MAX_LOGGED]:
             self._log.log(client, level, "%s: %s", client, text)
         more = sum(level >= logging.WARNING for level, _ in records[MAX_LOGGED:])
@@ -415,12 +414,7 @@ class Runner:
             request = self.bus.get()
             if request is None:
                 break
-            try:
-                self.handle(request)
-            except Exception as exc:
-                log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
-                if not request.future.done():
-                    request.future.set_exception(exc)
+            self.answer(request)
             served += 1
         if self._held:
             self._release()
@@ -428,6 +422,18 @@ class Runner:
             self._log.flush()
         self._settle()
         return served
+
+    def answer(self, request: Request) -> bool:
+        """:meth:`handle` a request; one whose handling raises gets the exception instead of
+        replies, and the loop goes on. True if nothing waits for the loop's attention after
+        it (a clock message, log lines held back): the bus may go on waiting."""
+        try:
+            self.handle(request)
+        except Exception as exc:
+            log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
+            if not request.future.done():
+                request.future.set_exception(exc)
+        return not (self._waits or self._held or self._log.holding)
 
     def run(
         self,
@@ -443,9 +449,12 @@ class Runner:
         every request between two steps.
         """
         self.sim.own(threading.get_ident())
+        if not self.lockstep:  # lockstep takes one request at a time, between steps
+            self.bus.answer_with(self.answer)
         try:
             self._run(on_frame, stop_event, until)
         finally:
+            self.bus.answer_with(None)
             self.sim.own(None)
 
     def _run(

@@ -509,3 +509,16 @@ def test_explain_is_none_over_the_two_port_scheme() -> None:
         with robot:
             assert math.isnan(robot.send("zz")[0])
             assert robot.explain() is None
+
+
+def test_frames_after_a_clock_message_wait_for_its_answer() -> None:
+    """A clock message is answered once simulated time gets there; the messages after it on
+    the same connection are executed meanwhile, but their frames go out after its own."""
+    with serving(speed=None) as (_, link), stream(link.stream.port) as sock:
+        sock.sendall(b"w0-2\n!idle\nzz\n?\n")
+        assert read_frame(sock) == [INF]
+        width, count = FRAME_HEADER.unpack(sock.recv(3, socket.MSG_WAITALL))
+        assert (width, count) == (8, 1)  # the idle answer (a time) before the NaN
+        assert struct.unpack("<d", sock.recv(8, socket.MSG_WAITALL))[0] > 0
+        assert math.isnan(read_frame(sock)[0])
+        assert "no device 'zz'" in read_text(sock)

@@ -30,11 +30,13 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from simmer.errors import BusClosed
 from simmer.protocol import Decoded
+
+if TYPE_CHECKING:
+    from _typeshed import FileDescriptorLike
 
 log = logging.getLogger("simmer.transport")
 
@@ -122,19 +124,23 @@ class Reply(Generic[T]):
         return self._error
 
 
-@dataclass(frozen=True)
 class Request:
-    """One received message, who sent it, and the slot its replies go into."""
+    """One received message, who sent it, and the slot its replies go into (a plain slotted
+    class: one is made per message, and a dataclass's would cost half a microsecond more).
 
-    decoded: Decoded
-    client: str
-    future: Reply[list[float]] = field(default_factory=Reply)
-    reasons: list[str] = field(default_factory=list)
-    """Why some replies are NaN, filled in by the loop before the future completes (the
-    persistent protocol's ``?`` sends them)."""
-    answer: list[str] = field(default_factory=list)
-    """A text answer instead of the values (a localization message's, ``%maze``), filled in
-    by the loop before the future completes; sent as a document frame."""
+    ``reasons``: why some replies are NaN, filled in by the loop before the future completes
+    (the persistent protocol's ``?`` sends them). ``answer``: a text answer instead of the
+    values (a localization message's, ``%maze``), filled in likewise; sent as a document
+    frame."""
+
+    __slots__ = ("answer", "client", "decoded", "future", "reasons")
+
+    def __init__(self, decoded: Decoded, client: str) -> None:
+        self.decoded = decoded
+        self.client = client
+        self.future: Reply[list[float]] = Reply()
+        self.reasons: list[str] = []
+        self.answer: list[str] = []
 
 
 class Timer:
@@ -174,6 +180,9 @@ class CommandBus:
         self._waiting = 0
         """The thread running :meth:`wait`'s callbacks (0: none): a request it submits needs
         no wake-up, as the loop serves the queue when the callbacks are done."""
+        self._answer: Callable[[Request], bool] | None = None
+        self._calm = True
+        """False once an answer in this round of callbacks left the loop something to do."""
         self._taken = 0
         self._clients: dict[str, str] = {}
         self._selector = selectors.DefaultSelector()
@@ -184,16 +193,32 @@ class CommandBus:
         os.set_blocking(self._wake_r, False)
         os.set_blocking(self._wake_w, False)
         self._selector.register(self._wake_r, selectors.EVENT_READ)
+        self._keys: dict[int, selectors.SelectorKey] = {}
+        """Each watched socket's key by descriptor, as the selector has it (its own map costs
+        four calls a look-up, and the loop looks one up per ready socket)."""
         self._release = weakref.finalize(self, _release, self._selector, self._wake_r, self._wake_w)
 
     def submit(self, message: Decoded | str, client: str) -> Reply[list[float]]:
         """Queue a message (text or already-decoded bytes); the future holds its replies."""
         return self.request(message, client).future
 
-    def request(self, message: Decoded | str, client: str) -> Request:
-        """Queue a message like :meth:`submit`; the request also carries the NaN reasons."""
+    def request(self, message: Decoded | str, client: str, *, now: bool = False) -> Request:
+        """Queue a message like :meth:`submit`; the request also carries the NaN reasons.
+
+        ``now``: a watched socket's callback asks for it to be answered before this returns,
+        which the loop does if it answers that way (:meth:`answer_with`) and nothing is
+        queued ahead of it; otherwise it is queued."""
         decoded = Decoded(message) if isinstance(message, str) else message
         request = Request(decoded, client)
+        if (
+            now
+            and self._answer is not None
+            and self._waiting == threading.get_ident()
+            and self._queue.empty()
+        ):
+            if not self._answer(request):
+                self._calm = False
+            return request
         with self._lock:
             if self._closed:
                 request.future.set_exception(BusClosed("the simulation has stopped"))
@@ -202,6 +227,13 @@ class CommandBus:
             if threading.get_ident() != self._waiting:
                 self._wake()  # a socket callback in the loop itself: its wait ends anyway
         return request
+
+    def answer_with(self, answer: Callable[[Request], bool] | None) -> None:
+        """Loop thread: answer a request asked for ``now`` by calling ``answer`` in the
+        socket's callback (None: queue every request). ``answer`` completes the request's
+        future (or keeps it, for a clock message) and says whether the loop may go on
+        waiting (False: it has something to do once the callbacks are done)."""
+        self._answer = answer
 
     def interrupt(self) -> None:
         """Wake the loop thread from its wait now (any thread may ask), so it notices at once
@@ -258,48 +290,70 @@ class CommandBus:
 
     def wait(self, timeout: float) -> None:
         """Loop thread: sleep until a request arrives, a watched socket is ready or a timer is
-        due (at most ``timeout`` s), running the ready sockets' callbacks and due timers."""
-        timeout = 0.0 if not self._queue.empty() else max(timeout, 0.0)
-        with self._timer_lock:
-            if self._timers:
-                timeout = min(timeout, max(0.0, self._timers[0][0] - time.monotonic()))
-        try:
-            ready = self._selector.select(timeout)
-        except ValueError:  # closed by another thread meanwhile
-            if self._closed:
-                return
-            raise
-        self._waiting = threading.get_ident()
-        try:
-            self._dispatch(ready)
-        finally:
-            self._waiting = 0
-        self._run_timers()
+        due (at most ``timeout`` s), running the ready sockets' callbacks and due timers.
 
-    def _dispatch(self, ready: list[tuple[selectors.SelectorKey, int]]) -> None:
-        """Loop thread: run the callbacks of the ready sockets (and drain the wake-up pipe)."""
+        While the callbacks only answer messages at once (:meth:`answer_with`) and the loop
+        has nothing else to do, it goes on waiting until ``timeout``, not back through the
+        loop for every message; a request queued, a wake-up, or an answer that leaves the
+        loop something to do ends the wait."""
+        end = time.monotonic() + max(timeout, 0.0)
+        timers = self._timers
+        while True:
+            now = time.monotonic()
+            timeout = 0.0 if not self._queue.empty() else end - now
+            if timers:
+                with self._timer_lock:
+                    if timers:
+                        timeout = min(timeout, timers[0][0] - now)
+            try:
+                ready = self._selector.select(max(timeout, 0.0))
+            except ValueError:  # closed by another thread meanwhile
+                if self._closed:
+                    return
+                raise
+            self._waiting = threading.get_ident()
+            self._calm = True
+            try:
+                woken = self._dispatch(ready)
+            finally:
+                self._waiting = 0
+            now = time.monotonic()
+            if timers:
+                self._run_timers(now)
+            if woken or not (ready and self._calm and self._queue.empty()):
+                return
+            if now >= end or self._closed:
+                return
+
+    def _dispatch(self, ready: list[tuple[selectors.SelectorKey, int]]) -> bool:
+        """Loop thread: run the callbacks of the ready sockets (and drain the wake-up pipe);
+        True if the loop was woken (:meth:`interrupt`)."""
+        woken = False
         for key, events in ready:
             if key.fd == self._wake_r:
+                woken = True
                 with contextlib.suppress(BlockingIOError):
                     while os.read(self._wake_r, 4096):
                         pass
                 continue
             with self._watch_lock:
-                if self._closed or self._selector.get_map().get(key.fd) is not key:
+                if self._closed or self._keys.get(key.fd) is not key:
                     continue  # unwatched meanwhile
                 callback, on_error = key.data
                 try:
                     keep = callback(events)
                 except Exception as exc:
-                    self._unregister(key)
+                    self._unregister(key.fileobj)
                     self._failed(on_error, exc)
                     continue
                 if not keep:
-                    self._unregister(key)
+                    self._unregister(key.fileobj)
+        return woken
 
-    def _unregister(self, key: selectors.SelectorKey) -> None:
+    def _unregister(self, sock: FileDescriptorLike) -> None:
+        """Stop watching ``sock`` (caller holds ``_watch_lock``); no error if it is not."""
         with contextlib.suppress(KeyError, ValueError):  # it may have unwatched itself
-            self._selector.unregister(key.fileobj)
+            self._keys.pop(self._selector.unregister(sock).fd, None)
 
     @staticmethod
     def _failed(on_error: ErrorHandler | None, exc: Exception) -> None:
@@ -325,10 +379,11 @@ class CommandBus:
         with self._watch_lock:
             if self._closed:
                 raise BusClosed("the simulation has stopped")
-            if sock.fileno() in self._selector.get_map():
-                self._selector.modify(sock, events, (callback, on_error))
+            if sock.fileno() in self._keys:
+                key = self._selector.modify(sock, events, (callback, on_error))
             else:
-                self._selector.register(sock, events, (callback, on_error))
+                key = self._selector.register(sock, events, (callback, on_error))
+            self._keys[key.fd] = key
 
     def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
         """Run ``callback()`` in the loop thread after ``delay`` s (any thread may ask)."""
@@ -342,9 +397,8 @@ class CommandBus:
             self._wake()
         return timer
 
-    def _run_timers(self) -> None:
-        """Loop thread: run the timers that are due; one that raises is logged."""
-        now = time.monotonic()
+    def _run_timers(self, now: float) -> None:
+        """Loop thread: run the timers due at ``now``; one that raises is logged."""
         while True:
             with self._timer_lock:
                 if not self._timers or self._timers[0][0] > now:
@@ -361,8 +415,7 @@ class CommandBus:
         """Stop watching ``sock``; once this returns its callback is not running and won't run."""
         with self._watch_lock:
             if not self._closed:
-                with contextlib.suppress(KeyError, ValueError):
-                    self._selector.unregister(sock)
+                self._unregister(sock)
 
     def close(self) -> None:
         """Refuse new messages, fail the queued ones with :class:`BusClosed`, stop watching."""

@@ -80,6 +80,11 @@ GRACE = 1 / 60
 """Seconds a two-port reply connection with nothing to collect waits for a message whose
 connection was accepted before it and is still arriving (one step at 60 Hz), before it is
 closed empty as the original closed it; 0 under the lockstep clock."""
+REMEMBERED = 256
+"""Persistent-protocol lines whose decoding is kept (forgotten all at once past it): a
+program's repeated messages (``u0``, ``w0-6``) then cost no decoding."""
+REMEMBERED_BYTES = 128
+"""Longest line (with its ``\\n``) whose decoding is kept, so what is kept stays small."""
 _OUT_OF_RESOURCES = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
 
 
@@ -138,23 +143,29 @@ class _Connection:
         """Everything queued has been sent (subclasses may take more input now)."""
 
     def send(self, data: bytes) -> None:
-        """Queue bytes and send what the socket takes now."""
-        self.outbox += data
-        self.flush()
+        """Send what the socket takes now; queue the rest."""
+        if self.outbox:
+            self.outbox += data
+            data = b""
+        self.flush(data)
 
-    def flush(self) -> None:
-        """Send what the socket takes; watch for writability while anything is left."""
+    def flush(self, data: bytes = b"") -> None:
+        """Send what the socket takes (what is queued, or else ``data``, whose rest is queued);
+        watch for writability while anything is left."""
         if self.closed:
             return
-        if self.outbox:
+        if data or self.outbox:
             try:
-                sent = self.conn.send(self.outbox)
+                sent = self.conn.send(data or self.outbox)
             except BlockingIOError:
                 sent = 0
             except OSError:  # the client has gone
                 self.close()
                 return
-            del self.outbox[:sent]
+            if data:
+                self.outbox += data[sent:]
+            else:
+                del self.outbox[:sent]
         if not self.outbox:
             if self.close_when_sent:
                 self.close()
@@ -630,6 +641,24 @@ class StreamServer(_Server):
         self.encoding = encoding
         self.lenient = lenient
         """Parse commands the original SimMeR's way (a run of an original ``config.py``)."""
+        self.remembered: dict[bytes, Decoded] = {}
+
+    def decode(self, line: bytes) -> Decoded:
+        """Decode a line (without its ``\\n``) and parse its commands; the decodings of the
+        last :data:`REMEMBERED` short lines are kept, as a program sends the same few
+        messages again and again (a :class:`Decoded` is immutable)."""
+        decoded = self.remembered.get(line)
+        if decoded is None:
+            clock = line.startswith(CLOCK_PREFIX)
+            size = len(line) + 1
+            decoded = decode_message(
+                line, self.encoding, size=size, clock=clock, lenient=self.lenient
+            )
+            if size <= REMEMBERED_BYTES:
+                if len(self.remembered) >= REMEMBERED:
+                    self.remembered.clear()
+                self.remembered[line] = decoded
+        return decoded
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A persistent connection, listed among the bus's clients while open."""
@@ -657,11 +686,15 @@ class _StreamConnection(_Connection):
         self.searched = 0
         self.ended = False  # a message over a limit: no more input; close after its reply
         self.last: Reply[list[float]] | None = None
-        self.latest: Reply[list[float]] | None = None  # the last message submitted
+        self.owed: deque[Request | None] = deque()
+        """The messages not yet answered on the wire, in the order they came (None: a ``?``):
+        frames go out from the front only, so a clock message answered later holds back
+        the frames of the messages after it."""
         self.in_flight = 0  # commands (and ``?``) submitted and not yet answered
         self.messages = 0
         self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
         self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
+        self.pumping = False  # in :meth:`pump` (a reply sent meanwhile leaves the lines to it)
 
     def reading(self) -> bool:
         """Read while the connection may have more in flight."""
@@ -678,7 +711,10 @@ class _StreamConnection(_Connection):
         self.pump()
 
     def drained(self) -> None:
-        """Every reply is sent: take the next lines (if any came meanwhile)."""
+        """Every reply is sent: take the next lines (if any came meanwhile; a reply sent
+        while :meth:`pump` runs leaves them to its loop)."""
+        if self.pumping:
+            return
         if self.inbox:
             self.pump()
         else:
@@ -686,33 +722,33 @@ class _StreamConnection(_Connection):
 
     def pump(self) -> None:
         """Submit complete lines while allowed (see the class doc); a line over the size
-        limit gets one NaN and ends the connection."""
+        limit gets one NaN and ends the connection. The first line may be answered at once
+        (:meth:`submit`); the rest wait for the loop's next turn, as other clients' do."""
         inbox = self.inbox
+        now = True  # the first line only: one client cannot keep the loop to itself
+        self.pumping = True
         while not (self.closed or self.ended or self.outbox) and self.in_flight < MAX_IN_FLIGHT:
             end = inbox.find(b"\n", self.searched)
             if end < 0:
                 self.searched = len(inbox)
                 if len(inbox) > MAX_MESSAGE_BYTES:
                     reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)))
+                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)), now)
                     inbox.clear()
                 break
             line = bytes(inbox[:end])
             del inbox[: end + 1]
             self.searched = 0
             self.messages += 1
-            if line.rstrip(b"\r") == EXPLAIN:
+            if line in (EXPLAIN, EXPLAIN + b"\r"):
                 self.server.bus.took(end + 1)
                 self.explain_later()
             elif line.startswith(META_PREFIX):
-                self.submit(decode_meta(line, end + 1))
+                self.submit(decode_meta(line, end + 1), now)
             else:
-                stream = self.stream
-                clock = line.startswith(CLOCK_PREFIX)
-                decoded = decode_message(
-                    line, stream.encoding, size=end + 1, clock=clock, lenient=stream.lenient
-                )
-                self.submit(decoded)
+                self.submit(self.stream.decode(line), now)
+            now = False
+        self.pumping = False
         self.rearm()
         self.update_events()
 
@@ -732,20 +768,38 @@ class _StreamConnection(_Connection):
             self.deadline = None if limit is None else time.monotonic() + limit
         self.waiting_for = kind
 
-    def submit(self, decoded: Decoded) -> None:
-        """Queue one message; its frame is sent as soon as the loop has answered it."""
+    def submit(self, decoded: Decoded, now: bool = False) -> None:
+        """Queue one message; its frame is sent once the loop has answered it and every
+        message before it. With ``now`` the loop may answer it before this returns
+        (:meth:`CommandBus.request`)."""
         if decoded.over_limit:
             self.ended = True
         self.in_flight += decoded.count
-        request = self.server.bus.request(decoded, self.client)
-        self.latest = request.future
+        request = self.server.bus.request(decoded, self.client, now=now)
         if self.ended:
             self.last = request.future
-        request.future.add_done_callback(lambda _future: self.guard(lambda: self.reply(request)))
+        if request.future.done() and not self.owed:  # answered at once, nothing before it
+            self.reply(request)
+            return
+        self.owed.append(request)
+        if request.future.done():
+            self.send_answered()
+        else:
+            request.future.add_done_callback(lambda _future: self.guard(self.send_answered))
+
+    def send_answered(self) -> None:
+        """Send the frames of the answered messages at the front of :attr:`owed`."""
+        owed = self.owed
+        while owed and (owed[0] is None or owed[0].future.done()):
+            request = owed.popleft()
+            if request is None:
+                self.explain()
+            else:
+                self.reply(request)
 
     def reply(self, request: Request) -> None:
-        """Loop thread (or a closing bus): send the reply frame; futures complete in order.
-        A frame is checked before it goes: more values than a message may have (none should)
+        """Loop thread (or a closing bus): send the reply frame of an answered message. A
+        frame is checked before it goes: more values than a message may have (none should)
         become one NaN and the end of the connection."""
         self.in_flight -= request.decoded.count
         if self.closed:
@@ -769,12 +823,10 @@ class _StreamConnection(_Connection):
         self.send(frame_replies(values, width))
 
     def explain_later(self) -> None:
-        """Answer ``?`` once the message before it is answered (frames go out in order)."""
+        """Answer ``?`` once the messages before it are answered (frames go out in order)."""
         self.in_flight += 1
-        if self.latest is None:
-            self.explain()
-        else:
-            self.latest.add_done_callback(lambda _future: self.guard(self.explain))
+        self.owed.append(None)
+        self.send_answered()
 
     def explain(self) -> None:
         """Send the reasons of the last answered message as a text frame."""

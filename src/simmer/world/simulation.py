@@ -235,29 +235,33 @@ class Simulation:
 
     def execute(self, command: Command) -> Answer:
         """Execute one parsed command: its reply value and, for a NaN, why."""
-        text = printable(command.text)
         if command.error is not None:
+            text = printable(command.text)
             return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
         if command.device == STOP_ID:
             self._robot.stop()
             return Answer(math.inf)
         if command.device in self._switched_off:
-            why = f"command '{text}': device {command.device} is switched off"
+            why = f"command '{printable(command.text)}': device {command.device} is switched off"
             return Answer.nan(logging.DEBUG, why)
         device = self._robot.devices.get(command.device)
         if device is None:
+            text = printable(command.text)
             why = f"bad command '{text}': no device '{printable(command.device)}' on the robot"
             return Answer.nan(logging.WARNING, why)
         try:
             value = float(device.simulate(command.value, self))
         except CommandError as exc:
+            text = printable(command.text)
             return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(str(exc))}")
         except DEVICE_FAULTS as exc:
             self._switch_off(device, f"command {command.text!r}", exc)
+            text = printable(command.text)
             why = f"command '{text}': device {command.device} raised and is switched off"
             return Answer.nan(logging.DEBUG, why)
         if math.isnan(value) and command.device in self._robot.drives:
-            return Answer.nan(logging.DEBUG, f"'{text}': a drive is still moving")
+            why = f"'{printable(command.text)}': a drive is still moving"
+            return Answer.nan(logging.DEBUG, why)
         return Answer(value)
 
     # ----------------------------------------------------------------- time
