@@ -8,6 +8,8 @@ import pytest
 from simmer.config.models import SIMMER_DEFAULT_WALLS
 from simmer.world import Maze, floor_pattern
 
+from helpers import default_data, make_sim
+
 
 def test_default_maze_walls_are_merged_boundary_and_solid_edges() -> None:
     maze = Maze(((1, 0), (1, 1)), 12.0, 3.0, 5489)
@@ -64,3 +66,14 @@ def test_cast_ray_hits_nearest_wall() -> None:
     assert maze.cast_ray(6.0, 6.0, 270.0) == pytest.approx(30.0, abs=1e-12)  # +x
     assert maze.cast_ray(6.0, 6.0, 0.0) == pytest.approx(6.0, abs=1e-12)  # +y, down
     assert maze.cast_ray(6.0, 6.0, 270.0, limit=10.0) == float("inf")
+
+
+@pytest.mark.parametrize("cell", [2**64, -(2**70), 3])
+def test_a_cell_of_any_other_whole_number_is_floor(cell: int) -> None:
+    """An edited manifest with a cell of 2**64 once stopped ``simmer plot`` with a traceback."""
+    data = default_data()
+    walls = [list(row) for row in SIMMER_DEFAULT_WALLS]
+    walls[0][0] = cell
+    data["walls"] = walls
+    maze = make_sim(data).maze
+    assert maze.solid.tolist() == [[value == 0 for value in row] for row in SIMMER_DEFAULT_WALLS]

@@ -67,7 +67,8 @@ class Maze:
     floor_white: BoolArray = field(init=False)
 
     def __post_init__(self) -> None:
-        self.solid = np.array(self.cells, dtype=np.int64) == 0
+        # Compared in Python: any other whole number is floor, however large (2**64 is too).
+        self.solid = np.array([[cell == 0 for cell in row] for row in self.cells], dtype=bool)
         rows, cols = self.solid.shape
         padded = np.pad(self.solid, 1, constant_values=True)
         self.hwall = padded[:-1, 1:-1] != padded[1:, 1:-1]
