@@ -189,3 +189,10 @@ def free_port() -> int:
     with socket.create_server(("127.0.0.1", 0)) as sock:
         port: int = sock.getsockname()[1]
     return port
+
+
+def read_text_frame(sock: socket.socket) -> str:
+    """One persistent-protocol text frame (width 0: ``?``'s reasons, ``%maze``) from ``sock``."""
+    width, size = struct.unpack("<BH", sock.recv(3, socket.MSG_WAITALL))
+    assert width == 0
+    return sock.recv(size, socket.MSG_WAITALL).decode() if size else ""

@@ -10,14 +10,13 @@ import math
 import select
 import selectors
 import socket
-import struct
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import pytest
 
-from link_support import read_frame
+from link_support import read_frame, read_text_frame
 from simmer.protocol import Decoded
 from simmer.runner import Runner
 from simmer.transport.bus import CommandBus, Request
@@ -48,6 +47,25 @@ def bus() -> Iterator[CommandBus]:
     bus.close()
 
 
+def asked_in_a_callback(bus: CommandBus) -> list[Request]:
+    """One turn of the loop's wait in which a socket's callback asks for ``u0`` to be answered
+    ``now``; the requests it made."""
+    ours, theirs = socket.socketpair()
+    asked: list[Request] = []
+
+    def ready(_events: int) -> bool:
+        ours.recv(100)
+        asked.append(bus.request("u0", "client", now=True))
+        return True
+
+    with ours, theirs:
+        bus.watch(ours, ready, selectors.EVENT_READ)
+        theirs.sendall(b"u0\n")
+        select.select([ours], [], [], DEADLINE)
+        bus.wait(DEADLINE)
+    return asked
+
+
 def test_a_request_asked_now_in_a_callback_is_answered_before_request_returns(
     bus: CommandBus,
 ) -> None:
@@ -73,19 +91,7 @@ def test_a_request_asked_now_in_a_callback_is_answered_before_request_returns(
 def test_a_request_asked_now_never_overtakes_one_queued_before_it(bus: CommandBus) -> None:
     bus.answer_with(answered(7.0))
     first = bus.submit("w0-1", "another client")  # queued from this thread: wakes the loop
-    ours, theirs = socket.socketpair()
-    asked: list[Request] = []
-
-    def ready(_events: int) -> bool:
-        ours.recv(100)
-        asked.append(bus.request("u0", "client", now=True))
-        return True
-
-    with ours, theirs:
-        bus.watch(ours, ready, selectors.EVENT_READ)
-        theirs.sendall(b"u0\n")
-        select.select([ours], [], [], DEADLINE)
-        bus.wait(DEADLINE)  # ends at once: a request is queued
+    asked = asked_in_a_callback(bus)  # the wait ends at once: a request is queued
     assert len(asked) == 1
     assert not asked[0].future.done()
     queued = [bus.get(), bus.get()]
@@ -102,18 +108,7 @@ def test_now_is_only_honoured_in_the_loops_callbacks_and_with_an_answerer(
     assert not request.future.done()
     assert bus.queued == 1
     bus.get()
-    ours, theirs = socket.socketpair()  # in a callback, but nobody answers at once
-    asked: list[Request] = []
-
-    def ready(_events: int) -> bool:
-        ours.recv(100)
-        asked.append(bus.request("u0", "client", now=True))
-        return True
-
-    with ours, theirs:
-        bus.watch(ours, ready, selectors.EVENT_READ)
-        theirs.sendall(b"u0\n")
-        bus.wait(DEADLINE)
+    asked = asked_in_a_callback(bus)  # in a callback, but nobody answers at once
     assert not asked[0].future.done()
     assert bus.queued == 1
 
@@ -256,19 +251,13 @@ def test_a_pipeline_is_answered_in_order_the_first_line_at_once(loop: Loop) -> N
     assert 0 < reading[0] < 433
 
 
-def read_text(sock: socket.socket) -> str:
-    width, size = struct.unpack("<BH", sock.recv(3, socket.MSG_WAITALL))
-    assert width == 0
-    return sock.recv(size, socket.MSG_WAITALL).decode() if size else ""
-
-
 def test_explain_after_a_message_answered_at_once_gives_its_reasons(loop: Loop) -> None:
     loop.client.sendall(b"zz\n")
     assert loop.turn_until(lambda: readable(loop.client), "a reply") == 0
     assert math.isnan(read_frame(loop.client)[0])
     loop.client.sendall(b"?\n")
     loop.turn_until(lambda: readable(loop.client), "the reasons")
-    assert "no device 'zz'" in read_text(loop.client)
+    assert "no device 'zz'" in read_text_frame(loop.client)
 
 
 def test_a_failure_answering_at_once_closes_that_connection_only(

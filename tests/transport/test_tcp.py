@@ -26,6 +26,7 @@ from link_support import (
     loop,
     output,
     read_frame,
+    read_text_frame,
     serving,
     stop,
     stream,
@@ -489,17 +490,11 @@ def test_explain_is_answered_in_order_with_pipelined_messages() -> None:
     with serving() as (_, link), stream(link.stream.port) as sock:
         sock.sendall(b"zz\n?\nu1\n?\n\xff\n?\n")
         assert math.isnan(read_frame(sock)[0])
-        assert "no device 'zz'" in read_text(sock)
+        assert "no device 'zz'" in read_text_frame(sock)
         assert read_frame(sock) == [pytest.approx(3.5)]
-        assert read_text(sock) == ""
+        assert read_text_frame(sock) == ""
         assert math.isnan(read_frame(sock)[0])
-        assert "not utf-8 text" in read_text(sock)
-
-
-def read_text(sock: socket.socket) -> str:
-    width, size = FRAME_HEADER.unpack(sock.recv(3, socket.MSG_WAITALL))
-    assert width == 0
-    return sock.recv(size, socket.MSG_WAITALL).decode() if size else ""
+        assert "not utf-8 text" in read_text_frame(sock)
 
 
 def test_explain_is_none_over_the_two_port_scheme() -> None:
@@ -521,4 +516,4 @@ def test_frames_after_a_clock_message_wait_for_its_answer() -> None:
         assert (width, count) == (8, 1)  # the idle answer (a time) before the NaN
         assert struct.unpack("<d", sock.recv(8, socket.MSG_WAITALL))[0] > 0
         assert math.isnan(read_frame(sock)[0])
-        assert "no device 'zz'" in read_text(sock)
+        assert "no device 'zz'" in read_text_frame(sock)
