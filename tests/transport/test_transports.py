@@ -1,4 +1,5 @@
-"""Every transport together: a message over the command limit gets one NaN on each."""
+"""Every transport together: a message over the command limit gets one NaN on each, and so
+does a reading too large for a 4-byte reply."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ import serial
 
 from link_support import read_frame, serving, stream, two_port_send
 from simmer.protocol import MAX_COMMANDS
+
+from helpers import default_data, make_sim
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -39,3 +42,29 @@ def test_a_message_over_the_command_limit_gets_one_nan_on_every_transport(
             assert struct.unpack("<f", tty.read(4)) == (pytest.approx(3.5),)
         assert not runner.sim.robot.any_drive_moving  # nothing in an over-limit message ran
     assert caplog.text.count(f"over the limit of {MAX_COMMANDS}") == 3
+
+
+@pytest.mark.parametrize("width", [4, 8])
+def test_a_reading_too_large_for_a_4_byte_reply_is_nan_with_its_reason_on_every_transport(
+    width: int, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A device class returning 1e300 once closed the connection with an internal error."""
+    caplog.set_level(logging.WARNING)
+    data = default_data()
+    data["reply_bytes"] = width
+    sim = make_sim(data)
+    sim.robot.devices["u0"].simulate = lambda value, sim: 1e300  # type: ignore[method-assign]
+    with serving(sim, serial=True) as (_, link):
+        assert link.serial is not None
+        with stream(link.stream.port) as sock:
+            sock.sendall(b"u0,u1\n")
+            replies = [read_frame(sock), two_port_send(link, b"u0,u1", width)]
+        with serial.Serial(link.serial.path, 9600, timeout=10) as tty:
+            tty.write(b"u0,u1\n")
+            replies.append(
+                list(struct.unpack(f"<2{'f' if width == 4 else 'd'}", tty.read(2 * width)))
+            )
+    for reading, u1 in replies:
+        assert u1 == pytest.approx(3.5)  # the message is answered, the connection kept
+        assert math.isnan(reading) if width == 4 else reading == 1e300
+    assert caplog.text.count("beyond what a 4-byte reply holds") == (3 if width == 4 else 0)

@@ -59,6 +59,10 @@ MANUAL_TURN = 120.0  # deg/s
 MANUAL_KEYS = "wasdqe"
 
 
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+"""The largest reading a 4-byte reply can carry; a device reading beyond it answers NaN."""
+
+
 class Answer(NamedTuple):
     """One command's reply ``value`` and, for a NaN, ``why`` (logged at ``level`` by whoever
     reports it)."""
@@ -98,6 +102,7 @@ class Simulation:
         self.observers: list[Observer] = []
         self._simulate_list = settings.simulate_list
         self._lenient = settings.lenient_commands
+        self._widest = FLOAT32_MAX if settings.reply_bytes == 4 else math.inf
         self._build()
 
     @classmethod
@@ -262,6 +267,12 @@ class Simulation:
         if math.isnan(value) and command.device in self._robot.drives:
             why = f"'{printable(command.text)}': a drive is still moving"
             return Answer.nan(logging.DEBUG, why)
+        if abs(value) > self._widest and math.isfinite(value):
+            why = (
+                f"command '{printable(command.text)}': device {command.device} read {value:g}, "
+                f"beyond what a 4-byte reply holds (±{FLOAT32_MAX:.3g}); reply_bytes = 8 sends it"
+            )
+            return Answer.nan(logging.WARNING, why)
         return Answer(value)
 
     # ----------------------------------------------------------------- time
