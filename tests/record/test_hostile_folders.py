@@ -5,6 +5,7 @@ plain line naming the file and what is wrong, within a second of CPU time."""
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -196,6 +197,11 @@ HOSTILE: dict[str, tuple[Callable[[Path], None], tuple[str, ...], tuple[str, ...
     "corrupt report": (_report('{"outcome": '), ("plot",), ("report.json", "JSON")),
     "report of text": (_report('{"outcome": "x"}'), ("plot",), ("report.json",)),
     "step 10**12": (_events({**COMMAND, "time": 1.0, "step": 10**12}), ("replay",), ("limit",)),
+    "step Infinity": (
+        _events({**COMMAND, "time": 1.0, "step": math.inf}),
+        ("replay",),
+        ("events.jsonl line", "infinity"),
+    ),
     "time 1e10": (_events({**COMMAND, "time": 1e10, "step": 5}), ("plot",), ("time 1e+10",)),
     "event a list": (_events([1]), ("replay",), ("events.jsonl line",)),  # type: ignore[arg-type]
     "event type a list": (_events({**COMMAND, "type": [1]}), ("replay",), ("unknown event type",)),

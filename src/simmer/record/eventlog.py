@@ -216,7 +216,7 @@ def event_from_dict(data: dict[str, Any]) -> Event:
     try:
         values = {name: readers[name](value) for name, value in data.items() if name != "type"}
         return cls(**values)
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:  # a step of Infinity
         raise ValueError(f"not a {data['type']} event: {exc}") from None
 
 
