@@ -22,6 +22,7 @@ import ctypes
 import os
 import signal
 import sys
+from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
 
@@ -63,6 +64,31 @@ def _parents(zombies: bool = False) -> dict[int, int]:
             if fields and (fields[0] == "Z") == zombies:  # Z: exited, to be reaped
                 parents[int(entry.name)] = int(fields[1])
     return parents
+
+
+def still_running(pid: int) -> Callable[[], bool]:
+    """A check that process ``pid`` is still the one running now: by its start time in
+    ``/proc``, as a pid may be reused once it has exited; where there is no ``/proc``, by
+    being this process's parent."""
+    stat = Path(f"/proc/{pid}/stat")
+
+    def state_and_start(text: str) -> tuple[str, str]:
+        fields = text[text.rfind(")") + 2 :].split()  # the name may hold spaces and ")"
+        return fields[0], fields[19]  # state (Z: exited), start time (clock ticks after boot)
+
+    try:
+        _, started = state_and_start(stat.read_text())
+    except OSError:
+        return lambda: os.getppid() == pid
+
+    def running() -> bool:
+        try:
+            state, start = state_and_start(stat.read_text())
+        except OSError:  # gone
+            return False
+        return state != "Z" and start == started
+
+    return running
 
 
 def descendants(pid: int | None = None) -> set[int]:

@@ -27,12 +27,12 @@ NOISE = "drives.w0.error.y"
 
 
 def children() -> list[Any]:
-    """This process's child processes, but multiprocessing's resource tracker (started with
-    the first spawned process, it stays until this process ends)."""
+    """This process's child processes, but multiprocessing's resource tracker and fork server
+    (each started with the first pool that needs it, they stay until this process ends)."""
     return [
         child
         for child in psutil.Process().children(recursive=True)
-        if "resource_tracker" not in " ".join(child.cmdline())
+        if not any(name in " ".join(child.cmdline()) for name in ("resource_tracker", "forkserver"))
     ]
 
 
