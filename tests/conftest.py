@@ -1,5 +1,5 @@
-"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; a fixture
-keeping a CPU busy."""
+"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; the same
+generated examples on every run; a fixture keeping a CPU busy."""
 
 import os
 import subprocess
@@ -8,10 +8,18 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 sys.path.insert(0, str(Path(__file__).parent))
+
+settings.register_profile("repeatable", derandomize=True, database=None)
+"""The suite's generated tests (fuzzing, properties) draw the same examples on every run, so
+a run passes or fails the same way on any machine; ``--hypothesis-profile explore`` draws new
+ones each time, to look for what these miss."""
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("repeatable")
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
