@@ -1,10 +1,10 @@
 """Run a sweep's runs on an executor, record each as it finishes, then film the first failures.
 
 The engine is any :class:`concurrent.futures.Executor` given picklable :class:`RunSpec`
-descriptions: a local process pool by default (workers forked from a server that has the
-simulator loaded, on Linux, or ``spawn``ed, which keep their configurations cached and a
-simulation warm), or a Dask cluster's executor
-(:func:`dask_engine`: a scheduler's address, or a local cluster of worker processes). Ray is
+descriptions: a local process pool by default (on Linux, workers forked from a server that has
+the simulator loaded; elsewhere ``spawn``ed ones; each keeps its configurations cached and a
+simulation warm), or a Dask cluster's executor (:func:`dask_engine`: a scheduler's address,
+or a local cluster of worker processes). Ray is
 not offered: it is a heavy dependency for what Dask already does here, and would sit behind the
 same interface as one more ``concurrent.futures`` executor. A run's own failures are recorded by
 the worker (:func:`~simmer.sweep.runs.execute`); a local worker process that dies is recorded
@@ -101,7 +101,7 @@ def local_pool(workers: int | None = None) -> Engine:
     (:mod:`simmer.sweep.preload`), so it starts in milliseconds instead of a second of
     CPU; elsewhere each is ``spawn``ed (Windows has nothing else; on macOS a fork can break
     the system's frameworks). Each worker exits by itself if this process goes away
-    (:func:`_watch_parent`)."""
+    (:func:`_watch_sweep`)."""
     count = workers or os.cpu_count() or 1
     if sys.platform.startswith("linux"):
         context: multiprocessing.context.BaseContext = multiprocessing.get_context("forkserver")
@@ -111,12 +111,12 @@ def local_pool(workers: int | None = None) -> Engine:
     return lambda: ProcessPoolExecutor(
         max_workers=count,
         mp_context=context,
-        initializer=_watch_parent,
+        initializer=_watch_sweep,
         initargs=(os.getpid(),),
     )
 
 
-def _watch_parent(sweep: int) -> None:
+def _watch_sweep(sweep: int) -> None:
     """In a worker: when the ``sweep`` that started it is gone (``kill -9``, a crash), stop
     the run in progress as Ctrl-C would (its program's whole tree with it) and exit; a worker
     is otherwise left waiting for work forever (the sweep is watched by its pid, not as the
