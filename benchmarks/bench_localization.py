@@ -22,7 +22,6 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import numpy as np
-import pygame
 
 from simmer import Simulation
 from simmer.client import connect
@@ -112,7 +111,6 @@ def bench_frame(frames: int = 300) -> tuple[float, float]:
     from simmer.client import Client
     from simmer.runner import LocalLink
 
-    pygame.init()
     sim = Simulation.from_config()
     maker = SnapshotMaker(sim)
     robot = Client(LocalLink(sim), lockstep=True)
