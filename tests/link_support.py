@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from simmer.options import RunOptions
+from simmer.protocol import FRAME_HEADER
 from simmer.runner import Runner
 from simmer.serve import Served, serve
 from simmer.transport import Transports
@@ -95,20 +96,21 @@ def two_port_send(link: Transports, message: bytes, width: int = 4) -> list[floa
     return unpack(two_port_raw(link, message), width)
 
 
+def _exactly(sock: socket.socket, size: int) -> bytes:
+    """``size`` bytes from ``sock`` (the server must not close it before)."""
+    data = b""
+    while len(data) < size:
+        chunk = sock.recv(size - len(data))
+        assert chunk, "connection closed mid-frame"
+        data += chunk
+    return data
+
+
 def read_frame(sock: socket.socket) -> list[float]:
     """Read one persistent-protocol reply frame."""
-
-    def exactly(size: int) -> bytes:
-        data = b""
-        while len(data) < size:
-            chunk = sock.recv(size - len(data))
-            assert chunk, "connection closed mid-frame"
-            data += chunk
-        return data
-
-    width, count = struct.unpack("<BH", exactly(3))
+    width, count = FRAME_HEADER.unpack(_exactly(sock, FRAME_HEADER.size))
     code = "<f" if width == 4 else "<d"
-    return [value for (value,) in struct.iter_unpack(code, exactly(width * count))]
+    return [value for (value,) in struct.iter_unpack(code, _exactly(sock, width * count))]
 
 
 def stream(port: int) -> socket.socket:
@@ -193,6 +195,6 @@ def free_port() -> int:
 
 def read_text_frame(sock: socket.socket) -> str:
     """One persistent-protocol text frame (width 0: ``?``'s reasons, ``%maze``) from ``sock``."""
-    width, size = struct.unpack("<BH", sock.recv(3, socket.MSG_WAITALL))
+    width, size = FRAME_HEADER.unpack(_exactly(sock, FRAME_HEADER.size))
     assert width == 0
-    return sock.recv(size, socket.MSG_WAITALL).decode() if size else ""
+    return _exactly(sock, size).decode()

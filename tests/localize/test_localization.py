@@ -17,13 +17,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from link_support import serving
+from link_support import read_frame, serving
 from simmer.cli import app
 from simmer.client import Client, connect
 from simmer.geometry import Pose
 from simmer.localize.belief import MAX_PARTICLES, SHOWS_PER_SECOND, BeliefBoard, parse_belief
 from simmer.options import RunOptions
-from simmer.protocol import FRAME_HEADER
 from simmer.record.eventlog import read_events
 from simmer.runner import LocalLink
 from simmer.serve import serve
@@ -65,27 +64,15 @@ def test_the_maze_over_the_persistent_protocol_and_export_map_agree_with_the_con
 
 
 def test_localization_messages_are_one_reply_each_and_bad_ones_answer_nan() -> None:
-    values = []
     with (
         serving() as (_runner, link),
         socket.create_connection(("127.0.0.1", link.stream.port), timeout=10) as sock,
     ):
         sock.sendall(b"%pose 1 2 3\n%pose 1 2\n%nonsense\n%show {bad\nu0\n")
-        for _ in range(5):
-            width, count = FRAME_HEADER.unpack(_read(sock, 3))
-            values.append(np.frombuffer(_read(sock, width * count), f"<f{width}").tolist())
+        values = [read_frame(sock) for _ in range(5)]
     assert values[0] == [0.0]
     assert all(math.isnan(v[0]) for v in values[1:4])
     assert values[4][0] > 0
-
-
-def _read(sock: socket.socket, size: int) -> bytes:
-    data = b""
-    while len(data) < size:
-        chunk = sock.recv(size - len(data))
-        assert chunk
-        data += chunk
-    return data
 
 
 @pytest.mark.slow
@@ -115,8 +102,7 @@ def test_the_simulator_cuts_a_show_over_the_bound_itself(caplog: pytest.LogCaptu
         runner.sim.add_observer(board)
         with socket.create_connection(("127.0.0.1", link.stream.port), timeout=10) as sock:
             sock.sendall(b'%show {"particles":[' + rows.encode() + b"]}\n")
-            width, count = FRAME_HEADER.unpack(_read(sock, 3))
-            (cut,) = np.frombuffer(_read(sock, width * count), f"<f{width}")
+            (cut,) = read_frame(sock)
     assert cut == 500
     assert "500 points of a shown belief cut" in caplog.text
     assert board.belief is not None
