@@ -48,6 +48,12 @@ def adopt_orphans() -> bool:
     return adopted
 
 
+def _stat_fields(stat: str) -> list[str]:
+    """The fields of a ``/proc/PID/stat`` line after the process's name, from its state on
+    (the name, in parentheses, may hold spaces and ")")."""
+    return stat[stat.rfind(")") + 2 :].split()
+
+
 def _parents(zombies: bool = False) -> dict[int, int]:
     """Every running process's parent (or every zombie's), from ``/proc`` (empty where there
     is none)."""
@@ -60,7 +66,7 @@ def _parents(zombies: bool = False) -> dict[int, int]:
                 stat = Path(entry.path, "stat").read_text()
             except OSError:  # it exited meanwhile
                 continue
-            fields = stat[stat.rfind(")") + 2 :].split()  # the name may hold spaces and ")"
+            fields = _stat_fields(stat)
             if fields and (fields[0] == "Z") == zombies:  # Z: exited, to be reaped
                 parents[int(entry.name)] = int(fields[1])
     return parents
@@ -73,7 +79,7 @@ def still_running(pid: int) -> Callable[[], bool]:
     stat = Path(f"/proc/{pid}/stat")
 
     def state_and_start(text: str) -> tuple[str, str]:
-        fields = text[text.rfind(")") + 2 :].split()  # the name may hold spaces and ")"
+        fields = _stat_fields(text)
         return fields[0], fields[19]  # state (Z: exited), start time (clock ticks after boot)
 
     try:
