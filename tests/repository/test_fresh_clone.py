@@ -78,14 +78,15 @@ def test_the_set_up_installs_only_when_needed(
         assert setup.main(["--venv", str(tmp_path / "venv"), *argv]) == 0
         return [call[-1] for call in calls if "install" in call]
 
-    assert installs() == ["pip", str(repo)]  # a fresh clone: pip, then SimMeR
+    assert installs() == [str(repo)]  # a fresh clone: SimMeR, with the environment's own pip
     assert "source" in capsys.readouterr().out  # the activation line, once
     assert installs() == []  # nothing changed: straight to work
+    assert calls[-1][1:] == ["-m", "compileall", "-q", str(repo / "src")]  # bytecode kept fresh
     assert capsys.readouterr().out == ""
-    assert installs("--test") == ["pip", f"{repo}[test]"]  # the test tools are another stamp
+    assert installs("--test") == [f"{repo}[test]"]  # the test tools are another stamp
     later = pyproject.stat().st_mtime + 10
     os.utime(pyproject, (later, later))
-    assert installs() == ["pip", str(repo)]  # pyproject.toml changed
+    assert installs() == [str(repo)]  # pyproject.toml changed
 
 
 def on_the_page(command: str, page: str) -> str:
