@@ -18,7 +18,9 @@ from typing import Any
 import pytest
 
 from simmer import Simulation
+from simmer.cli import _recorded_run_limits
 from simmer.record import RunRecorder, read_events
+from simmer.record.runfolder import MAX_RUN_SECONDS
 from simmer.view.replay_model import Recording
 
 from helpers import drive_noisily, noisy_config
@@ -156,12 +158,28 @@ def test_a_run_recording_onto_a_small_disk_keeps_serving(small_disk: Path, tmp_p
     assert check.incomplete is not None
 
 
-@pytest.mark.slow
-def test_a_recorded_run_stops_at_an_hour_of_simulated_time(tmp_path: Path) -> None:
+def test_a_recorded_run_is_limited_to_an_hour_by_default(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert MAX_RUN_SECONDS == 3600  # docs/limits.md's figure
+    assert _recorded_run_limits(None, None, "python robot.py") == (3600, 3600)
+    said = capsys.readouterr().out
+    assert "a recorded run stops at 3600 s of simulated time (--seconds changes it)" in said
+    assert "a recorded program is stopped after 3600 s of wall time (--timeout changes it)" in said
+
+
+def test_a_recorded_run_stops_at_its_simulated_time_limit(tmp_path: Path) -> None:
+    # The limit lowered to a minute in this run's process: an hour is 216,000 steps, 8 s of CPU.
+    lowered = (
+        "import simmer.record.runfolder as folder; folder.MAX_RUN_SECONDS = 60.0; "
+        "from simmer.cli import main; main()"
+    )
     folder = tmp_path / "run"
     done = subprocess.run(
         [
-            SIMMER,
+            sys.executable,
+            "-c",
+            lowered,
             "run",
             "--headless",
             "--record",
@@ -175,7 +193,7 @@ def test_a_recorded_run_stops_at_an_hour_of_simulated_time(tmp_path: Path) -> No
         timeout=150,
     )
     assert done.returncode == 3, done.stdout + done.stderr  # the --seconds limit's status
-    assert "a recorded run stops at 3600 s of simulated time (--seconds changes it)" in done.stdout
+    assert "a recorded run stops at 60 s of simulated time (--seconds changes it)" in done.stdout
     report = json.loads((folder / "report.json").read_text())
     assert report["ended_by"] == "seconds"
-    assert report["duration"] == pytest.approx(3600, abs=0.1)
+    assert report["duration"] == pytest.approx(60, abs=0.1)
