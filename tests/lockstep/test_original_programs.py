@@ -24,7 +24,7 @@ from typing import Any
 import pytest
 
 from link_support import run_program
-from simmer import Simulation
+from simmer import Simulation, runner
 from simmer.record.eventlog import event_line
 from simmer.sweep import run_sweep, sweep_from_dict
 from simmer.world.events import CommandEvent, Event, RunEvent
@@ -97,8 +97,9 @@ def test_a_message_sent_before_a_sleep_is_taken_before_the_sleep(
 
 @pytest.mark.slow
 def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    monkeypatch.setattr(runner, "SYNC_WAIT", 0.2)  # the wait itself, not its 5 s, is tested
     program = tmp_path / "partial.py"
     program.write_text(
         "import os, socket, time\n"
