@@ -144,7 +144,7 @@ def test_the_cli_says_how_a_program_run_ended(tmp_path: Path) -> None:
     hang = tmp_path / "hangs.py"
     hang.write_text("import threading\nthreading.Event().wait()\n")  # never sleeps: hangs
     timed = subprocess.run(
-        [sys.executable, "-m", "simmer", "run", "--headless", "--timeout", "2", "--program",
+        [sys.executable, "-m", "simmer", "run", "--headless", "--timeout", "0.5", "--program",
          f"{sys.executable} {hang}"],
         capture_output=True, text=True, timeout=60, check=False,
     )  # fmt: skip
