@@ -24,8 +24,9 @@ settings.load_profile("repeatable")
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """The ``fresh`` and ``slow`` tests first (in their order; the rest after, in theirs): the
-    suite is spread over every CPU (``-n auto``), and a test of seconds started last would
-    keep one CPU busy after the others are done."""
+    suite is spread over every CPU (``-n auto``, two tests at a time to each worker as it frees
+    up: ``--maxschedchunk 2`` in pyproject.toml), and a test of seconds started last would keep
+    one CPU busy after the others are done."""
 
     def order(item: pytest.Item) -> int:
         if item.get_closest_marker("fresh") is not None:
