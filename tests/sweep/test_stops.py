@@ -10,6 +10,8 @@ import os
 import signal
 import subprocess
 import sys
+from collections.abc import Iterator
+from contextlib import suppress
 from pathlib import Path
 
 import pytest
@@ -44,6 +46,8 @@ for slot in range(2):  # the first two runs finish at once; the others run until
 while not (here / "release").exists():
     pass
 """
+CHILD = b"sleep\x00100000\x00"
+"""A program's detached child's command line, as ``/proc/PID/cmdline`` has it."""
 SWEEP = """\
 config = "robot.toml"
 program = "python program.py"
@@ -81,12 +85,19 @@ def pids(folder: Path, kind: str) -> list[int]:
 
 
 @pytest.fixture
-def sweep_folder(tmp_path: Path) -> Path:
+def sweep_folder(tmp_path: Path) -> Iterator[Path]:
+    """A sweep's folder; afterwards, what a failed test left running is ended (its programs
+    are released, their children killed), so that no ``sleep 100000`` outlives the test."""
     (tmp_path / "pids").mkdir()
     (tmp_path / "program.py").write_text(PROGRAM)
     (tmp_path / "robot.toml").write_text("")
     (tmp_path / "sweep.toml").write_text(SWEEP)
-    return tmp_path
+    yield tmp_path
+    (tmp_path / "release").write_text("")
+    for pid in pids(tmp_path, "child"):
+        with suppress(OSError):  # still the child (not a new process with its pid) if alive
+            if alive(pid) and Path(f"/proc/{pid}/cmdline").read_bytes() == CHILD:
+                os.kill(pid, signal.SIGKILL)
 
 
 def start_sweep(folder: Path, *extra: str) -> subprocess.Popen[str]:
