@@ -1,6 +1,7 @@
 """A sweep stops cleanly (issue 18, items 2 and 5): SIGINT, SIGTERM or SIGHUP to ``simmer
-sweep`` alone leaves no process of it (its workers, their programs, and the programs' children
-that started sessions of their own), keeps the finished runs and ``--resume`` goes on; after
+sweep`` alone, or Ctrl-C or a closed terminal signalling its whole process group, leaves no
+process of it (its workers, their programs, and the programs' children that started sessions
+of their own), keeps the finished runs and ``--resume`` goes on; after
 ``kill -9`` of the sweep its workers notice and exit, with their programs. A ``simmer run
 --program`` stops the program's detached children too."""
 
@@ -157,6 +158,23 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     assert resumed.returncode == 0, stderr
     assert "(2 run now" in stdout
     assert len(recorded(sweep_folder)) == 4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGHUP])
+def test_a_signal_to_the_sweeps_process_group_stops_every_program(
+    sweep_folder: Path, signum: int
+) -> None:
+    """Ctrl-C (SIGINT) or closing the terminal (SIGHUP) signals the sweep's whole process
+    group: each worker gets the terminal's signal, then the SIGINT the sweep sends it, which
+    must not cut short its stopping of its program's tree (a detached child was left)."""
+    sweep, below = running_sweep(sweep_folder)
+    os.killpg(sweep.pid, signum)  # as the terminal does: the sweep and its workers
+    _, stderr = sweep.communicate(timeout=90)
+    assert sweep.returncode == 128 + signum, stderr
+    assert "--resume goes on" in stderr
+    assert_all_gone(sweep, below, sweep_folder)
+    assert len(recorded(sweep_folder)) == 2
 
 
 @pytest.mark.slow
