@@ -47,7 +47,7 @@ def test_a_stop_signal_landing_in_a_finalizer_still_stops_the_run() -> None:
     from simmer.serve import _stop_on_signals
 
     stop, woken, received = threading.Event(), [], []
-    restore = _stop_on_signals(stop, lambda: woken.append(True), received)
+    restore = _stop_on_signals(stop, lambda: woken.append(True), received, running=lambda: True)
     try:
         _DiesWithASignal()  # collected at once: the signal arrives in its __del__
     finally:
@@ -55,3 +55,33 @@ def test_a_stop_signal_landing_in_a_finalizer_still_stops_the_run() -> None:
     assert stop.is_set()
     assert woken == [True]
     assert received == ["SIGTERM"]
+
+
+@pytest.mark.parametrize("first", ["SIGINT", "SIGTERM", "its end"])
+def test_ctrl_c_once_a_run_is_stopping_is_only_noted(first: str) -> None:
+    """Ctrl-C raises KeyboardInterrupt while the run goes on; once it is stopping (a first
+    Ctrl-C, a stop signal, or its program's exit or a limit) another is only noted: raised,
+    it landed in the stopping of the program's process tree (a sweep's worker gets Ctrl-C
+    from the terminal, then SIGINT from the sweep) and left its detached children running."""
+    from simmer.serve import _stop_on_signals
+
+    stop, received, ended = threading.Event(), [], []
+    before = signal.getsignal(signal.SIGINT)
+    restore = _stop_on_signals(stop, lambda: None, received, running=lambda: not ended)
+    try:
+        if first == "SIGINT":
+            with pytest.raises(KeyboardInterrupt):
+                signal.raise_signal(signal.SIGINT)
+        elif first == "SIGTERM":
+            signal.raise_signal(signal.SIGTERM)
+        else:
+            ended.append("program")
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except KeyboardInterrupt:
+            pytest.fail("Ctrl-C raised KeyboardInterrupt while the run was stopping")
+    finally:
+        restore()
+    noted = [] if first == "its end" else [first]
+    assert received == [*noted, "SIGINT"]
+    assert signal.getsignal(signal.SIGINT) is before

@@ -56,15 +56,23 @@ STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 
 
 def _stop_on_signals(
-    stop: threading.Event, wake: Callable[[], None], received: list[str]
+    stop: threading.Event,
+    wake: Callable[[], None],
+    received: list[str],
+    running: Callable[[], bool],
 ) -> Callable[[], None]:
     """Make :data:`STOP_SIGNALS` stop a run as Esc does: note the signal in ``received``, set
     ``stop`` and ``wake`` the loop, so the run ends through its usual cleanup (serial link
-    removed, ports closed, recordings finished). The handler raises nothing: an exception
+    removed, ports closed, recordings finished). That handler raises nothing: an exception
     raised wherever the main thread happens to be can be swallowed (a signal landing in a
     finalizer, which Python ignores exceptions from, once left a run that never stopped) or
-    leave a lock held. Returns what puts the previous handlers back. Off the main thread
-    (tests) nothing changes: only the main thread may install handlers."""
+    leave a lock held. Ctrl-C (SIGINT), where Python's own handler takes it, raises
+    KeyboardInterrupt as that handler does only while the run goes on (``running()``, no
+    stop signal yet, ``stop`` not set); after that it is only noted in ``received``: a second
+    one (Ctrl-C pressed twice; a sweep's worker gets the terminal's, then the sweep's own)
+    landed in the stopping of the program's process tree and left its detached children
+    running. Returns what puts the previous handlers back. Off the main thread (tests)
+    nothing changes: only the main thread may install handlers."""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
 
@@ -73,10 +81,18 @@ def _stop_on_signals(
         stop.set()
         wake()
 
+    def interrupt(_signum: int, _frame: FrameType | None) -> None:
+        first = running() and not received and not stop.is_set()
+        received.append("SIGINT")  # before raising: the next one finds the run stopping
+        if first:
+            raise KeyboardInterrupt
+
     previous = {}
     for name in STOP_SIGNALS:
         if (number := getattr(signal, name, None)) is not None:
             previous[number] = signal.signal(number, handle)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not ignored
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, interrupt)
 
     def restore() -> None:
         for number, handler in previous.items():
@@ -144,9 +160,11 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     started: Program | None = None
     before: set[int] = set()
     signalled: list[str] = []
-    restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
+    restore_signals = _stop_on_signals(
+        stop, runner.bus.wake_from_signal, signalled, running=lambda: not ended
+    )
     try:
         transports = Transports(runner.bus, sim.config, options)
         with transports:

@@ -1,6 +1,7 @@
 """A sweep stops cleanly (issue 18, items 2 and 5): SIGINT, SIGTERM or SIGHUP to ``simmer
-sweep`` alone leaves no process of it (its workers, their programs, and the programs' children
-that started sessions of their own), keeps the finished runs and ``--resume`` goes on; after
+sweep`` alone, or Ctrl-C or a closed terminal signalling its whole process group, leaves no
+process of it (its workers, their programs, and the programs' children that started sessions
+of their own), keeps the finished runs and ``--resume`` goes on; after
 ``kill -9`` of the sweep its workers notice and exit, with their programs. A ``simmer run
 --program`` stops the program's detached children too."""
 
@@ -10,6 +11,8 @@ import os
 import signal
 import subprocess
 import sys
+from collections.abc import Iterator
+from contextlib import suppress
 from pathlib import Path
 
 import pytest
@@ -44,6 +47,8 @@ for slot in range(2):  # the first two runs finish at once; the others run until
 while not (here / "release").exists():
     pass
 """
+CHILD = b"sleep\x00100000\x00"
+"""A program's detached child's command line, as ``/proc/PID/cmdline`` has it."""
 SWEEP = """\
 config = "robot.toml"
 program = "python program.py"
@@ -81,12 +86,19 @@ def pids(folder: Path, kind: str) -> list[int]:
 
 
 @pytest.fixture
-def sweep_folder(tmp_path: Path) -> Path:
+def sweep_folder(tmp_path: Path) -> Iterator[Path]:
+    """A sweep's folder; afterwards, what a failed test left running is ended (its programs
+    are released, their children killed), so that no ``sleep 100000`` outlives the test."""
     (tmp_path / "pids").mkdir()
     (tmp_path / "program.py").write_text(PROGRAM)
     (tmp_path / "robot.toml").write_text("")
     (tmp_path / "sweep.toml").write_text(SWEEP)
-    return tmp_path
+    yield tmp_path
+    (tmp_path / "release").write_text("")
+    for pid in pids(tmp_path, "child"):
+        with suppress(OSError):  # still the child (not a new process with its pid) if alive
+            if alive(pid) and Path(f"/proc/{pid}/cmdline").read_bytes() == CHILD:
+                os.kill(pid, signal.SIGKILL)
 
 
 def start_sweep(folder: Path, *extra: str) -> subprocess.Popen[str]:
@@ -146,6 +158,23 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     assert resumed.returncode == 0, stderr
     assert "(2 run now" in stdout
     assert len(recorded(sweep_folder)) == 4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGHUP])
+def test_a_signal_to_the_sweeps_process_group_stops_every_program(
+    sweep_folder: Path, signum: int
+) -> None:
+    """Ctrl-C (SIGINT) or closing the terminal (SIGHUP) signals the sweep's whole process
+    group: each worker gets the terminal's signal, then the SIGINT the sweep sends it, which
+    must not cut short its stopping of its program's tree (a detached child was left)."""
+    sweep, below = running_sweep(sweep_folder)
+    os.killpg(sweep.pid, signum)  # as the terminal does: the sweep and its workers
+    _, stderr = sweep.communicate(timeout=90)
+    assert sweep.returncode == 128 + signum, stderr
+    assert "--resume goes on" in stderr
+    assert_all_gone(sweep, below, sweep_folder)
+    assert len(recorded(sweep_folder)) == 2
 
 
 @pytest.mark.slow

@@ -145,7 +145,9 @@ def _watch_sweep(sweep: int) -> None:
 def _stopped_by_signals(pool: _Pool) -> Iterator[None]:
     """Within ``with``: :data:`STOP_SIGNALS` stop the sweep as Ctrl-C does: each worker is
     sent SIGINT (it stops its run, and its program's tree), and :class:`SweepStopped` is
-    raised here, where the pool is then shut down. Only in the main thread."""
+    raised here, where the pool is then shut down. Only in the main thread. Ctrl-C or a
+    closed terminal signals the workers too: the SIGINT sent here then reaches a run that is
+    stopping already, which only notes it (:func:`simmer.serve.serve`)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
