@@ -5,9 +5,10 @@
 
 The first time, and again only when pyproject.toml changes or the install is broken, it makes
 ``.venv`` in SimMeR's folder and installs SimMeR into it (editable: a change to the code needs
-no reinstall); otherwise it only brings the source's bytecode up to date. ``./scripts/run.sh`` and ``./scripts/test.sh``
-call it. After an install it says how to put ``simmer`` on the path of a terminal (bash, zsh,
-PowerShell, cmd). It uses only the standard library, so any Python 3.11 or newer runs it.
+no reinstall); otherwise it only brings the source's bytecode up to date. ``./scripts/run.sh``
+and ``./scripts/test.sh`` call it. After an install it says how to put ``simmer`` on the path
+of a terminal (bash, zsh, PowerShell, cmd). It uses only the standard library, so any Python
+3.11 or newer runs it.
 """
 
 from __future__ import annotations
