@@ -178,6 +178,27 @@ def test_a_signal_to_the_sweeps_process_group_stops_every_program(
 
 
 @pytest.mark.slow
+def test_a_stopped_sweep_starts_none_of_its_queued_runs(sweep_folder: Path) -> None:
+    """Six runs on two workers: when the sweep stops, two runs are queued behind the two in
+    progress; a worker that took one after the stop ran it to its wall limit (600 s here)."""
+    sweep_toml = sweep_folder / "sweep.toml"
+    sweep_toml.write_text(sweep_toml.read_text().replace("seeds = 4", "seeds = 6"))
+    sweep, below = running_sweep(sweep_folder)
+    os.kill(sweep.pid, signal.SIGINT)
+    _, stderr = sweep.communicate(timeout=90)
+    assert sweep.returncode == 128 + signal.SIGINT, stderr
+    assert_all_gone(sweep, below, sweep_folder)
+    assert len(pids(sweep_folder, "program")) == 4  # no program began after the stop
+    assert len(recorded(sweep_folder)) == 2
+    (sweep_folder / "release").write_text("")
+    resumed = start_sweep(sweep_folder, "--resume")
+    stdout, stderr = resumed.communicate(timeout=150)
+    assert resumed.returncode == 0, stderr
+    assert "(4 run now" in stdout
+    assert len(recorded(sweep_folder)) == 6
+
+
+@pytest.mark.slow
 def test_the_workers_of_a_killed_sweep_exit_with_their_programs(sweep_folder: Path) -> None:
     sweep, below = running_sweep(sweep_folder)
     sweep.kill()  # SIGKILL: the sweep cannot clean up; its workers notice it is gone

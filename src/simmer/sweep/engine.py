@@ -19,6 +19,7 @@ executor: a run is repeatable, and a filmed run that went otherwise is said so i
 from __future__ import annotations
 
 import _thread
+import ctypes
 import importlib
 import multiprocessing
 import os
@@ -93,6 +94,9 @@ it) before it stops what is left and exits."""
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 """Signals that stop a sweep cleanly (Ctrl-C, ``kill``, closing the terminal), where they exist."""
 
+_stopping: ctypes.c_bool | None = None
+"""In a local pool's worker: the pool's flag, set when the sweep stops (:func:`_watch_sweep`)."""
+
 
 def local_pool(workers: int | None = None) -> Engine:
     """A pool of ``workers`` processes (default: one per core), none a copy of this process
@@ -108,21 +112,42 @@ def local_pool(workers: int | None = None) -> Engine:
         context.set_forkserver_preload(["simmer.sweep.preload"])
     else:
         context = multiprocessing.get_context("spawn")
-    return lambda: ProcessPoolExecutor(
+    stopping = context.RawValue(ctypes.c_bool, False)  # shared memory: set without a lock
+    return lambda: _LocalPool(
+        stopping,
         max_workers=count,
         mp_context=context,
         initializer=_watch_sweep,
-        initargs=(os.getpid(),),
+        initargs=(os.getpid(), stopping),
     )
 
 
-def _watch_sweep(sweep: int) -> None:
+class _LocalPool(ProcessPoolExecutor):
+    """A local pool whose workers start no run once ``stopping`` is set (:meth:`_Pool.stop`):
+    a run queued before a stop would otherwise start after it, and run to its wall limit."""
+
+    def __init__(self, stopping: ctypes.c_bool, **options: Any) -> None:
+        super().__init__(**options)
+        self.stopping = stopping
+
+
+def _unless_stopping(work: Work, run: RunSpec) -> RunResult:
+    """In a worker: ``work(run)``, unless its sweep is stopping; then the run does not start
+    (status ``stopped``, never recorded: the sweep records no row once it is stopped)."""
+    if _stopping is not None and _stopping.value:
+        return RunResult(run.key(), "stopped", None, 0.0, detail="the sweep was stopped first")
+    return work(run)
+
+
+def _watch_sweep(sweep: int, stopping: ctypes.c_bool) -> None:
     """In a worker: when the ``sweep`` that started it is gone (``kill -9``, a crash), stop
     the run in progress as Ctrl-C would (its program's whole tree with it) and exit; a worker
     is otherwise left waiting for work forever (the sweep is watched by its pid, not as the
     worker's parent: a forked worker's parent is the fork server, which stays while any worker
     does). The worker also becomes the subreaper of the programs it starts
-    (:mod:`simmer.proctree`)."""
+    (:mod:`simmer.proctree`), and keeps its pool's ``stopping`` flag (:func:`_unless_stopping`)."""
+    global _stopping  # noqa: PLW0603 (the worker's one flag, set by its initializer)
+    _stopping = stopping
     running = still_running(sweep)
     adopt_orphans()
     gone = threading.Event()
@@ -143,20 +168,18 @@ def _watch_sweep(sweep: int) -> None:
 
 @contextmanager
 def _stopped_by_signals(pool: _Pool) -> Iterator[None]:
-    """Within ``with``: :data:`STOP_SIGNALS` stop the sweep as Ctrl-C does: each worker is
-    sent SIGINT (it stops its run, and its program's tree), and :class:`SweepStopped` is
-    raised here, where the pool is then shut down. Only in the main thread. Ctrl-C or a
-    closed terminal signals the workers too: the SIGINT sent here then reaches a run that is
-    stopping already, which only notes it (:func:`simmer.serve.serve`)."""
+    """Within ``with``: :data:`STOP_SIGNALS` stop the sweep as Ctrl-C does: the runs stop
+    (:meth:`_Pool.stop`), and :class:`SweepStopped` is raised here, where the pool is then
+    shut down. Only in the main thread. Ctrl-C or a closed terminal signals the workers too:
+    the SIGINT sent here then reaches a run that is stopping already, which only notes it
+    (:func:`simmer.serve.serve`)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     stopping: list[int] = []
 
     def handle(signum: int, _frame: FrameType | None) -> None:
-        for pid in pool.worker_pids():
-            with suppress(OSError):
-                os.kill(pid, signal.SIGINT)
+        pool.stop()
         if not stopping:  # once: a second signal must not interrupt the shutdown
             stopping.append(signum)
             raise SweepStopped(signum)
@@ -244,10 +267,17 @@ class _Pool:
         width = getattr(self._current, "width", None)
         return width if isinstance(width, int) else self.default_width
 
-    def worker_pids(self) -> list[int]:
-        """The executor's worker processes, if it is a local pool."""
-        processes = getattr(self._current, "_processes", None) or {}
-        return [int(pid) for pid in processes]
+    def stop(self) -> None:
+        """Stop the runs of a local pool: its workers start no more (its ``stopping`` flag)
+        and each is sent SIGINT, which stops the run it has and its program's tree. The flag
+        is set first, so a run begins before the SIGINT or not at all."""
+        current = self._current
+        if isinstance(current, _LocalPool):
+            current.stopping.value = True
+        processes = getattr(current, "_processes", None) or {}
+        for pid in processes:
+            with suppress(OSError):
+                os.kill(pid, signal.SIGINT)
 
     def close(self, *, cancel: bool = False) -> None:
         """Shut the executor down (waiting for its runs unless ``cancel``)."""
@@ -370,7 +400,7 @@ def _execute_all(
             while not dead and waiting and len(flight) < _room(flight, waiting, retried, width):
                 run = waiting.pop()
                 try:
-                    flight[executor.submit(work, run)] = run
+                    flight[executor.submit(_unless_stopping, work, run)] = run
                 except BrokenProcessPool:  # never started: it goes to the next pool
                     waiting.append(run)
                     dead = True

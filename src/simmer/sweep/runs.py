@@ -113,7 +113,8 @@ class RunResult:
     ``status``: ``ok`` (the controller finished), ``error`` (it failed: non-zero exit status
     or an exception), ``seconds`` (the simulated-time limit ended it), ``timeout`` (the wall
     limit did), ``invalid`` (the overridden configuration does not validate) or ``crashed``
-    (the worker process died)."""
+    (the worker process died); ``stopped`` (the sweep stopped before it began) is never
+    recorded."""
 
     key: str
     status: str
