@@ -137,6 +137,17 @@ def assert_all_gone(sweep: subprocess.Popen[str], below: set[int], folder: Path)
     assert not any(alive(pid) for pid in pids(folder, "child"))  # the detached children too
 
 
+def resume_the_rest(folder: Path, runs: int) -> None:
+    """Release the programs and ``--resume`` the stopped sweep (two runs recorded): it runs
+    the others, and the table then has all ``runs``."""
+    (folder / "release").write_text("")
+    resumed = start_sweep(folder, "--resume")
+    stdout, stderr = resumed.communicate(timeout=150)
+    assert resumed.returncode == 0, stderr
+    assert f"({runs - 2} run now" in stdout
+    assert len(recorded(folder)) == runs
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
@@ -152,12 +163,7 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     assert "Traceback" not in stderr
     assert_all_gone(sweep, below, sweep_folder)
     assert len(recorded(sweep_folder)) == 2  # the two runs that finished
-    (sweep_folder / "release").write_text("")
-    resumed = start_sweep(sweep_folder, "--resume")
-    stdout, stderr = resumed.communicate(timeout=150)
-    assert resumed.returncode == 0, stderr
-    assert "(2 run now" in stdout
-    assert len(recorded(sweep_folder)) == 4
+    resume_the_rest(sweep_folder, runs=4)
 
 
 @pytest.mark.slow
@@ -190,12 +196,7 @@ def test_a_stopped_sweep_starts_none_of_its_queued_runs(sweep_folder: Path) -> N
     assert_all_gone(sweep, below, sweep_folder)
     assert len(pids(sweep_folder, "program")) == 4  # no program began after the stop
     assert len(recorded(sweep_folder)) == 2
-    (sweep_folder / "release").write_text("")
-    resumed = start_sweep(sweep_folder, "--resume")
-    stdout, stderr = resumed.communicate(timeout=150)
-    assert resumed.returncode == 0, stderr
-    assert "(4 run now" in stdout
-    assert len(recorded(sweep_folder)) == 6
+    resume_the_rest(sweep_folder, runs=6)
 
 
 @pytest.mark.slow

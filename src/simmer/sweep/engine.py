@@ -272,10 +272,10 @@ class _Pool:
         and each is sent SIGINT, which stops the run it has and its program's tree. The flag
         is set first, so a run begins before the SIGINT or not at all."""
         current = self._current
-        if isinstance(current, _LocalPool):
-            current.stopping.value = True
-        processes = getattr(current, "_processes", None) or {}
-        for pid in processes:
+        if not isinstance(current, _LocalPool):
+            return  # a Dask cluster's runs end as the pool is shut down
+        current.stopping.value = True
+        for pid in current._processes or {}:
             with suppress(OSError):
                 os.kill(pid, signal.SIGINT)
 
