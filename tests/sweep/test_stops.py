@@ -128,10 +128,26 @@ def recorded(folder: Path) -> list[str]:
     return table.read_text().splitlines()[1:] if table.exists() else []
 
 
+def command_line(pid: int) -> str:
+    """``pid`` and its command line, to name a process a test waited for in vain."""
+    try:
+        words = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:
+        return f"{pid} (gone)"
+    return f"{pid} {b' '.join(words).decode(errors='replace').strip()}"
+
+
 def assert_all_gone(sweep: subprocess.Popen[str], below: set[int], folder: Path) -> None:
-    wait_for(
-        lambda: not any(alive(pid) for pid in below), "every process of the sweep to go", STARTING
-    )
+    left: list[str] = []
+
+    def all_gone() -> bool:
+        left[:] = [command_line(pid) for pid in sorted(below) if alive(pid)]
+        return not left
+
+    try:
+        wait_for(all_gone, "every process of the sweep to go", STARTING)
+    except pytest.fail.Exception:
+        pytest.fail(f"still running after {STARTING:g} s: {left}")
     assert not in_group(sweep.pid)  # by process group: the sweep's own group is empty
     assert not descendants(sweep.pid)  # by parent: nothing below it
     assert not any(alive(pid) for pid in pids(folder, "child"))  # the detached children too
