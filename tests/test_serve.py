@@ -9,7 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from link_support import launch, output, stop
+from link_support import launch, output, run_program, stop
+from simmer import serve as serving
+from simmer.proctree import descendants
+from simmer.world import Simulation
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -85,3 +88,25 @@ def test_ctrl_c_once_a_run_is_stopping_is_only_noted(first: str) -> None:
     noted = [] if first == "its end" else [first]
     assert received == [*noted, "SIGINT"]
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_ctrl_c_as_the_program_starts_still_stops_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C landing after the program's process exists, but before the run holds it (the
+    program just started, its start-up line being said), still stops it with the run."""
+    start = serving._start_program
+    started: list[int] = []
+
+    def interrupted(*args: object, **kwargs: object) -> object:
+        program = start(*args, **kwargs)  # type: ignore[arg-type]
+        started.append(program.process.pid)
+        raise KeyboardInterrupt  # before serve has it
+
+    monkeypatch.setattr(serving, "_start_program", interrupted)
+    sleeper = tmp_path / "sleeper.py"
+    sleeper.write_text("import time\ntime.sleep(300)\n", encoding="utf-8")
+    served = run_program(Simulation.from_config(), f"python {sleeper}")
+    assert served.ended_by == "quit"
+    assert len(started) == 1
+    assert started[0] not in descendants()

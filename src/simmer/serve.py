@@ -158,7 +158,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     stop = threading.Event()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
-    before: set[int] = set()
+    # This process's descendants before the program started: what is not among them at
+    # the end is the program's, even if Ctrl-C landed before ``started`` held it.
+    before: set[int] | None = None
     signalled: list[str] = []
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
@@ -221,6 +223,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
         runner.bus.close()
         if started is not None:
             started.stop()
+        if before is not None:
             stop_strays(before)
         if filming is not None:
             _finish_video(filming, echo)
