@@ -47,10 +47,10 @@ def test_a_stop_signal_landing_in_a_finalizer_still_stops_the_run() -> None:
     """An exception raised from a finalizer is ignored by Python: once, under load, SIGTERM
     landed in one of Numba's while the handler raised KeyboardInterrupt, and the run never
     stopped. The handler now only sets the stop event and wakes the loop."""
-    from simmer.serve import _stop_on_signals
-
-    stop, woken, received = threading.Event(), [], []
-    restore = _stop_on_signals(stop, lambda: woken.append(True), received, running=lambda: True)
+    stop, woken, received = serving.RunStop(), [], []
+    restore = serving._stop_on_signals(
+        stop, lambda: woken.append(True), received, running=lambda: True
+    )
     try:
         _DiesWithASignal()  # collected at once: the signal arrives in its __del__
     finally:
@@ -60,17 +60,37 @@ def test_a_stop_signal_landing_in_a_finalizer_still_stops_the_run() -> None:
     assert received == ["SIGTERM"]
 
 
+def test_a_stop_signal_landing_while_the_run_stops_itself_does_not_hang_it() -> None:
+    """The main thread stops a run too (the window's Esc): a stop signal landing while it
+    holds the stop event's lock, inside ``set()``, once waited for that lock forever."""
+    stop, received = serving.RunStop(), []
+    restore = serving._stop_on_signals(stop, lambda: None, received, running=lambda: True)
+    finished = threading.Event()
+
+    def stop_while_signalled() -> None:
+        with stop._cond:  # where the main thread is inside stop.set()
+            signal.raise_signal(signal.SIGTERM)
+            sum(range(1000))  # the handler runs between these bytecodes
+        finished.set()
+
+    try:
+        stop_while_signalled()
+    finally:
+        restore()
+    assert finished.is_set()
+    assert stop.is_set()
+    assert received == ["SIGTERM"]
+
+
 @pytest.mark.parametrize("first", ["SIGINT", "SIGTERM", "its end"])
 def test_ctrl_c_once_a_run_is_stopping_is_only_noted(first: str) -> None:
     """Ctrl-C raises KeyboardInterrupt while the run goes on; once it is stopping (a first
     Ctrl-C, a stop signal, or its program's exit or a limit) another is only noted: raised,
     it landed in the stopping of the program's process tree (a sweep's worker gets Ctrl-C
     from the terminal, then SIGINT from the sweep) and left its detached children running."""
-    from simmer.serve import _stop_on_signals
-
-    stop, received, ended = threading.Event(), [], []
+    stop, received, ended = serving.RunStop(), [], []
     before = signal.getsignal(signal.SIGINT)
-    restore = _stop_on_signals(stop, lambda: None, received, running=lambda: not ended)
+    restore = serving._stop_on_signals(stop, lambda: None, received, running=lambda: not ended)
     try:
         if first == "SIGINT":
             with pytest.raises(KeyboardInterrupt):

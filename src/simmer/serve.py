@@ -55,18 +55,38 @@ STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 """Signals that stop a run as Ctrl-C does (``kill``, closing the terminal), where they exist."""
 
 
+class RunStop(threading.Event):
+    """The event that stops a run, which a signal handler can also set: without a lock
+    (:meth:`set_from_signal`), as the main thread may be inside :meth:`set` itself when
+    the signal lands (the window stops its run so). Once so set, :meth:`is_set` is True;
+    :meth:`wait` does not see it (nothing waits on a run's stop: its loops poll it)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._signalled = False
+
+    def set_from_signal(self) -> None:
+        """Set it from a signal handler (one plain assignment: no lock taken)."""
+        self._signalled = True
+
+    def is_set(self) -> bool:
+        """Whether the run is to stop."""
+        return self._signalled or super().is_set()
+
+
 def _stop_on_signals(
-    stop: threading.Event,
+    stop: RunStop,
     wake: Callable[[], None],
     received: list[str],
     running: Callable[[], bool],
 ) -> Callable[[], None]:
     """Make :data:`STOP_SIGNALS` stop a run as Esc does: note the signal in ``received``, set
     ``stop`` and ``wake`` the loop, so the run ends through its usual cleanup (serial link
-    removed, ports closed, recordings finished). That handler raises nothing: an exception
-    raised wherever the main thread happens to be can be swallowed (a signal landing in a
-    finalizer, which Python ignores exceptions from, once left a run that never stopped) or
-    leave a lock held. Ctrl-C (SIGINT), where Python's own handler takes it, raises
+    removed, ports closed, recordings finished). That handler raises nothing and takes no
+    lock: an exception raised wherever the main thread happens to be can be swallowed (a
+    signal landing in a finalizer, which Python ignores exceptions from, once left a run
+    that never stopped) or leave a lock held, and a lock the interrupted code holds is
+    never released to it. Ctrl-C (SIGINT), where Python's own handler takes it, raises
     KeyboardInterrupt as that handler does only while the run goes on (``running()``, no
     stop signal yet, ``stop`` not set); after that it is only noted in ``received``: a second
     one (Ctrl-C pressed twice; a sweep's worker gets the terminal's, then the sweep's own)
@@ -78,7 +98,7 @@ def _stop_on_signals(
 
     def handle(signum: int, _frame: FrameType | None) -> None:
         received.append(signal.Signals(signum).name)
-        stop.set()
+        stop.set_from_signal()
         wake()
 
     def interrupt(_signum: int, _frame: FrameType | None) -> None:
@@ -155,7 +175,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
         sim, speed=options.speed, lockstep=options.lockstep, link_delay=options.link_delay
     )
     outcome = Outcome.attach(sim)
-    stop = threading.Event()
+    stop = RunStop()
     ended: list[str] = []  # who stopped the run first
     started: Program | None = None
     # This process's descendants before the program started: what is not among them at
