@@ -130,3 +130,37 @@ def test_ctrl_c_as_the_program_starts_still_stops_it(
     assert served.ended_by == "quit"
     assert len(started) == 1
     assert started[0] not in descendants()
+
+
+def test_ctrl_c_in_the_cleanup_after_an_error_still_stops_the_program(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A run that fails (an internal error) stops its program on the way out; Ctrl-C landing
+    in that cleanup is only noted, so the program and what it detached still go, and the
+    error is what the caller gets."""
+    from simmer.lockstep import Program
+
+    def fails(*_args: object, **_kwargs: object) -> None:
+        raise RuntimeError("the loop failed")
+
+    program_stop = Program.stop
+
+    def ctrl_c_first(program: Program, grace: float = 2.0) -> int:
+        signal.raise_signal(signal.SIGINT)  # as the cleanup begins to stop the program
+        return program_stop(program, grace)
+
+    monkeypatch.setattr(serving.Runner, "run", fails)
+    monkeypatch.setattr(Program, "stop", ctrl_c_first)
+    detach = tmp_path / "detach.py"
+    child = tmp_path / "child"
+    detach.write_text(
+        "import subprocess, sys, time\n"
+        "p = subprocess.Popen(['sleep', '300'], start_new_session=True)\n"
+        f"open({str(child)!r}, 'w').write(str(p.pid))\n"
+        "time.sleep(300)\n",
+        encoding="utf-8",
+    )
+    before = descendants()
+    with pytest.raises(RuntimeError, match="the loop failed"):
+        run_program(Simulation.from_config(), f"python {detach}")
+    assert descendants() <= before

@@ -236,6 +236,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
         echo("stopped")
         ended.append("quit")
     except BaseException:
+        ended.append("error")  # stopping: a Ctrl-C in the cleanup is only noted, not raised
         if recorder is not None:  # keep what was recorded, with a report
             recorder.close("error")
         raise
