@@ -112,37 +112,60 @@ def drive_forever(sim: Simulation) -> Callable[[], None]:
     return keep_moving
 
 
-def steps_per_second(
-    data: dict[str, Any],
-    sample: str | None,
-    observed: bool = False,
-    recorded: bool = False,
-    every: int = 1,
-) -> float:
-    """Steps per second driving around, sending ``sample`` every ``every`` steps; ``observed``:
-    with the outcome every served run has; ``recorded``: and a run folder being written
-    (``simmer run --record``)."""
-    sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
-    if "gr" in sim.robot.devices:
-        sim.command("gr-1")  # holds the block if it is between the jaws
-    outcome = Outcome.attach(sim) if observed or recorded else None
-    folder = tempfile.TemporaryDirectory()
-    recorder = RunRecorder(sim, Path(folder.name) / "run", outcome=outcome) if recorded else None
-    keep_moving = drive_forever(sim)
+class Stepping:
+    """A simulation driving around, sending ``sample`` every ``every`` steps; ``observed``: with
+    the outcome every served run has; ``recorded``: and a run folder being written (``simmer
+    run --record``). Call it with a number of steps; :meth:`close` ends its recording."""
 
-    def run(count: int) -> None:
+    def __init__(
+        self,
+        data: dict[str, Any],
+        sample: str | None,
+        observed: bool = False,
+        recorded: bool = False,
+        every: int = 1,
+    ) -> None:
+        self.sim = sim = Simulation(config_from_dict(data, "<bench>", Path.cwd()))
+        if "gr" in sim.robot.devices:
+            sim.command("gr-1")  # holds the block if it is between the jaws
+        outcome = Outcome.attach(sim) if observed or recorded else None
+        self.folder = tempfile.TemporaryDirectory()
+        run_folder = Path(self.folder.name) / "run"
+        self.recorder = RunRecorder(sim, run_folder, outcome=outcome) if recorded else None
+        self.keep_moving = drive_forever(sim)
+        self.sample, self.every = sample, every
+        self(200)  # warm-up
+
+    def __call__(self, count: int) -> None:
+        sim, keep_moving, sample, every = self.sim, self.keep_moving, self.sample, self.every
         for _ in range(count):
             keep_moving()
             sim.step()
             if sample and sim.steps % every == 0:
                 sim.command(sample)
 
-    run(200)
-    rate = best_rate(run, 6000)
-    if recorder is not None:
-        recorder.close()
-    folder.cleanup()
-    return rate
+    def close(self) -> None:
+        """Finish the recording, if any, and remove its folder."""
+        if self.recorder is not None:
+            self.recorder.close()
+        self.folder.cleanup()
+
+
+def steps_per_second(cases: dict[str, Stepping], count: int = 6000) -> dict[str, float]:
+    """Best steps per second of each case over :data:`REPEATS` rounds, the cases taking turns
+    within each round: a ratio of two of them compares runs measured over the same seconds, so
+    a change in the machine's speed meanwhile (another virtual machine on the host, say) moves
+    both alike instead of one (measured one after the other, a ratio that must be below 1
+    once read 1.40). Closes the cases."""
+    best = dict.fromkeys(cases, float("inf"))
+    for _ in range(REPEATS):
+        for name, run in cases.items():
+            start = time.perf_counter()
+            run(count)
+            best[name] = min(best[name], time.perf_counter() - start)
+    for run in cases.values():
+        run.close()
+    return {name: count / seconds for name, seconds in best.items()}
 
 
 def recording_mb_per_minute() -> tuple[float, float]:
@@ -230,24 +253,28 @@ def main() -> dict[str, float]:
     """Run the core benchmark, print a table of figures against targets, return the figures."""
     every = "u0,u1,u2,u3,g0,c0,i0"
     lab, big = lab_data(), big_maze_data()
-    figures = {
-        "all_sensors_steps": steps_per_second(lab, every),
-        "no_sensor_steps": steps_per_second(lab, None),
-        "observed_all_sensors_steps": steps_per_second(lab, every, observed=True),
-        "observed_no_sensor_steps": steps_per_second(lab, None, observed=True),
-        "recorded_all_sensors_steps": steps_per_second(lab, every, recorded=True),
-        "recorded_no_sensor_steps": steps_per_second(lab, None, recorded=True),
-        "observed_typical_steps": steps_per_second(lab, TYPICAL, observed=True, every=3),
-        "recorded_typical_steps": steps_per_second(lab, TYPICAL, recorded=True, every=3),
+    figures = steps_per_second(
+        {
+            "all_sensors_steps": Stepping(lab, every),
+            "no_sensor_steps": Stepping(lab, None),
+            "observed_all_sensors_steps": Stepping(lab, every, observed=True),
+            "observed_no_sensor_steps": Stepping(lab, None, observed=True),
+            "recorded_all_sensors_steps": Stepping(lab, every, recorded=True),
+            "recorded_no_sensor_steps": Stepping(lab, None, recorded=True),
+            "observed_typical_steps": Stepping(lab, TYPICAL, observed=True, every=3),
+            "recorded_typical_steps": Stepping(lab, TYPICAL, recorded=True, every=3),
+            "big_all_sensors_steps": Stepping(big, every),
+            "project_all_sensors_steps": Stepping(project_data(), every, observed=True),
+            "project_no_sensor_steps": Stepping(project_data(), None, observed=True),
+            "carrying_no_sensor_steps": Stepping(project_data(True), None, observed=True),
+        }
+    )
+    figures |= {
         "ultrasonic_us": read_microseconds(lab, "u0", (6.0, 42.0)),
         "infrared_us": read_microseconds(lab, "i0", (6.0, 42.0)),
         "ultrasonic_command_us": command_microseconds(lab, "u0"),
         "big_ultrasonic_us": read_microseconds(big, "u0", (6.0, 6.0)),
         "big_infrared_us": read_microseconds(big, "i0", (6.0, 6.0)),
-        "big_all_sensors_steps": steps_per_second(big, every),
-        "project_all_sensors_steps": steps_per_second(project_data(), every, observed=True),
-        "project_no_sensor_steps": steps_per_second(project_data(), None, observed=True),
-        "carrying_no_sensor_steps": steps_per_second(project_data(True), None, observed=True),
     }
     figures["project_ratio"] = (
         figures["project_all_sensors_steps"] / figures["observed_all_sensors_steps"]
