@@ -326,6 +326,11 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         ("qps_fraction", "8 clients' queries/s / echo's", ">= 0.6", echo["qps_fraction"] >= 0.6),
     ):
         print(f"  {label:<40} {echo[key]:6.2f}  {target} {'ok' if better else 'MISSED'}")
+    if echo["floor_ms"] > echo["simmer_ms"]:
+        print(
+            "  (disturbed: the floor, which does less than SimMeR, measured slower; this "
+            "machine's speed changed meanwhile: run bench_link.py again)"
+        )
     rows.append({"transport": "versus echo", **echo})
     real = real_time_duration()
     with simulator("max") as where, connect(port=where["stream"]) as client:
