@@ -12,6 +12,8 @@ from typer.testing import CliRunner
 
 from link_support import serving
 from simmer.cli import app
+from simmer.world import Simulation
+from simmer.world.outcome import Outcome
 
 from helpers import EXAMPLES, default_data, make_sim
 
@@ -38,11 +40,16 @@ def test_dead_reckoning_reaches_the_block(capsys: pytest.CaptureFixture[str]) ->
 
 
 def test_obstacle_avoidance_stops_short_of_the_wall() -> None:
-    with serving(speed=None) as (runner, link):
+    """On the lab rover without noise it stops within a step of 2 in from the wall ahead,
+    without touching it (its nose is 1.5 in ahead of the front sensor)."""
+    sim = Simulation.from_config()
+    outcome = Outcome.attach(sim)
+    with serving(sim, speed=None) as (runner, link):
         steps = load("obstacle_avoidance").main(["--port", str(link.stream.port)])
         reading = runner.bus.submit("u0,u1,u2,u3", "test").result(timeout=5)
     assert 0 < steps < 200
-    assert 0 < min(reading) < 2.0
+    assert 2.0 - 1e-9 <= min(reading) < 2.5  # (steps of 0.5 in add up to 2 in to 1e-12)
+    assert outcome.collisions == 0
 
 
 @pytest.mark.parametrize("width", [4, 8])

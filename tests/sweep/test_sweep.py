@@ -427,7 +427,7 @@ def test_minimal_sweep_file_through_the_cli(tmp_path: Path) -> None:
         (
             "sweep_obstacle_avoidance.toml",
             108,
-            ("sensors.*.error", "sample", "drives.w0.bias.rotation", "drives.w0.error.y"),
+            ("drives.w0.error.y", "sample", "drives.w0.bias.rotation", "sensors.*.error"),
         ),
     ],
 )
