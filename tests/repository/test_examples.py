@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import importlib.util
+import itertools
+import json
 import math
 import sys
 from types import ModuleType
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from link_support import serving
+from link_support import run_program, serving
 from simmer.cli import app
 from simmer.world import Simulation
+from simmer.world.events import BeliefEvent, EstimateEvent, Event
 from simmer.world.outcome import Outcome
 
 from helpers import EXAMPLES, default_data, make_sim
@@ -50,6 +54,24 @@ def test_obstacle_avoidance_stops_short_of_the_wall() -> None:
     assert 0 < steps < 200
     assert 2.0 - 1e-9 <= min(reading) < 2.5  # (steps of 0.5 in add up to 2 in to 1e-12)
     assert outcome.collisions == 0
+
+
+def test_the_particle_cloud_example_shows_a_cloud_that_grows_around_the_truth() -> None:
+    """dead_reckoning_particles.py, run as the localization page says: one show of its
+    2,000 particles a move, the cloud spreading as moves add up, its mean near the truth."""
+    sim = Simulation.from_config()
+    events: list[Event] = []
+    sim.add_observer(events.append)
+    program = f"{sys.executable} {EXAMPLES / 'dead_reckoning_particles.py'}"
+    assert run_program(sim, program).exit_status == 0
+    shown = [json.loads(e.belief) for e in events if isinstance(e, BeliefEvent)]
+    assert len(shown) == 7  # the lab's moves without the last
+    assert all(len(belief["particles"]) == 2000 for belief in shown)
+    spread = [np.cov(np.array(belief["particles"])[:, :2].T).trace() for belief in shown]
+    assert all(later >= earlier for earlier, later in itertools.pairwise(spread))
+    assert spread[-1] > 5 * spread[0]  # 3.6 square inches after the first drive, 23.8 at the end
+    last = [e for e in events if isinstance(e, EstimateEvent)][-1]
+    assert math.dist(last.pose[:2], last.truth[:2]) < 3.0
 
 
 @pytest.mark.parametrize("width", [4, 8])
