@@ -15,7 +15,7 @@ import tempfile
 import time
 import tomllib
 import tracemalloc
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
@@ -86,14 +86,24 @@ def big_maze_data(rows: int = 40, cols: int = 80, seed: int = 1) -> dict[str, An
     return data
 
 
+def best_rates(runs: Mapping[str, Callable[[int], None]], count: int) -> dict[str, float]:
+    """Best operations per second of each ``run(count)`` over :data:`REPEATS` rounds, the runs
+    taking turns within each round: a ratio of two of them compares runs measured over the
+    same seconds, so a change in the machine's speed meanwhile (another virtual machine on the
+    host, say) moves both alike instead of one (measured one after the other, the project
+    rover's ratio to the plain one read 0.60 in one run and 1.40 in another)."""
+    best = dict.fromkeys(runs, float("inf"))
+    for _ in range(REPEATS):
+        for name, run in runs.items():
+            start = time.perf_counter()
+            run(count)
+            best[name] = min(best[name], time.perf_counter() - start)
+    return {name: count / seconds for name, seconds in best.items()}
+
+
 def best_rate(run: Callable[[int], None], count: int) -> float:
     """Best operations per second of ``run(count)`` over the repeats."""
-    best = float("inf")
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        run(count)
-        best = min(best, time.perf_counter() - start)
-    return count / best
+    return best_rates({"run": run}, count)["run"]
 
 
 def drive_forever(sim: Simulation) -> Callable[[], None]:
@@ -152,20 +162,12 @@ class Stepping:
 
 
 def steps_per_second(cases: dict[str, Stepping], count: int = 6000) -> dict[str, float]:
-    """Best steps per second of each case over :data:`REPEATS` rounds, the cases taking turns
-    within each round: a ratio of two of them compares runs measured over the same seconds, so
-    a change in the machine's speed meanwhile (another virtual machine on the host, say) moves
-    both alike instead of one (measured one after the other, a ratio that must be below 1
-    once read 1.40). Closes the cases."""
-    best = dict.fromkeys(cases, float("inf"))
-    for _ in range(REPEATS):
-        for name, run in cases.items():
-            start = time.perf_counter()
-            run(count)
-            best[name] = min(best[name], time.perf_counter() - start)
-    for run in cases.values():
-        run.close()
-    return {name: count / seconds for name, seconds in best.items()}
+    """Best steps per second of each case, measured in turns (:func:`best_rates`); closes
+    the cases."""
+    rates = best_rates(cases, count)
+    for case in cases.values():
+        case.close()
+    return rates
 
 
 def recording_mb_per_minute() -> tuple[float, float]:
