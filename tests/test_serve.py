@@ -11,6 +11,7 @@ import pytest
 
 from link_support import launch, output, run_program, stop
 from simmer import serve as serving
+from simmer.lockstep import Program
 from simmer.proctree import descendants
 from simmer.world import Simulation
 
@@ -138,8 +139,6 @@ def test_ctrl_c_in_the_cleanup_after_an_error_still_stops_the_program(
     """A run that fails (an internal error) stops its program on the way out; Ctrl-C landing
     in that cleanup is only noted, so the program and what it detached still go, and the
     error is what the caller gets."""
-    from simmer.lockstep import Program
-
     def fails(*_args: object, **_kwargs: object) -> None:
         raise RuntimeError("the loop failed")
 
