@@ -139,6 +139,7 @@ def test_ctrl_c_in_the_cleanup_after_an_error_still_stops_the_program(
     """A run that fails (an internal error) stops its program on the way out; Ctrl-C landing
     in that cleanup is only noted, so the program and what it detached still go, and the
     error is what the caller gets."""
+
     def fails(*_args: object, **_kwargs: object) -> None:
         raise RuntimeError("the loop failed")
 
