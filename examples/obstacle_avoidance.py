@@ -1,5 +1,5 @@
-"""Lab Task 1: advance in small steps, and stop before a step would take any ultrasonic sensor
-within 2 in of an obstacle.
+"""Lab Task 1: advance in small steps; stop before a step would take the front ultrasonic
+sensor within 2 in of an obstacle, or as soon as any sensor reads under 2 in.
 
 Start the simulator first (``simmer run``), then, in a second terminal with SimMeR's
 environment active (the README's Quick start says how), run
@@ -35,7 +35,8 @@ def main(argv: list[str] | None = None) -> int:
         for step in range(args.max_steps):
             readings = robot.send(SENSORS)
             print(f"step {step:3d}  " + "  ".join(f"u{i} {v:6.2f}" for i, v in enumerate(readings)))
-            if min(readings) - args.step < LIMIT:  # one more step would go under the limit
+            ahead = readings[0]  # u0 faces forward: the one sensor a step takes closer
+            if ahead - args.step < LIMIT or min(readings) < LIMIT:
                 print(f"obstacle {min(readings):.2f} in away: stopping")
                 return step
             robot.drive("w0", args.step)
