@@ -5,7 +5,10 @@ nobody collects are logged within a budget."""
 
 from __future__ import annotations
 
+import logging
+import re
 import socket
+import struct
 import subprocess
 import sys
 import textwrap
@@ -16,6 +19,7 @@ import pytest
 
 from link_support import serving, two_port_collect, two_port_send, unpack
 from simmer.transport import Transports
+from simmer.transport.tcp import LOGGED_LINES
 
 from helpers import wait_for
 
@@ -24,6 +28,7 @@ pytestmark = pytest.mark.timeout(300)
 FLOODERS = 16
 MESSAGES = ["u1", "u0,u1"]
 """Alternated: each reply's length says whose it is (one value, then two)."""
+UNCOLLECTED = 1000
 
 FLOOD = textwrap.dedent(
     """
@@ -127,3 +132,35 @@ def test_a_sequential_client_beside_16_flooders_gets_only_its_own_replies() -> N
 def test_every_reply_comes_beside_busy_processes(exchange: Exchange) -> None:
     with serving() as (_, link):
         assert lengths(link, 500, exchange) == own(500)
+
+
+def log_lines(caplog: pytest.LogCaptureFixture) -> list[str]:
+    """What the two-port server has logged so far."""
+    return [r.getMessage() for r in caplog.records if r.name == "simmer.transport"]
+
+
+@pytest.mark.slow
+def test_replies_nobody_collects_are_logged_within_a_budget(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Each dropped reply is a line, or counted in one, and at most LOGGED_LINES lines come
+    between counts (30,000 messages nobody collected wrote 29,999 lines)."""
+    caplog.set_level(logging.INFO, logger="simmer.transport")
+
+    def said() -> list[str]:
+        return [line for line in log_lines(caplog) if "is dropped" in line]
+
+    def counts() -> list[int]:
+        found = (re.search(r"(\d+) more line", line) for line in log_lines(caplog))
+        return [int(match[1]) for match in found if match]
+
+    with serving() as (_, link):
+        for _ in range(UNCOLLECTED):
+            with socket.create_connection(("127.0.0.1", link.two_port.port_rx)) as out:
+                out.sendall(b"u1")
+        # Collected once all are answered: the first reply (v1.1 kept only the first).
+        assert two_port_collect(link) == struct.pack("<f", 3.5)
+        wait_for(
+            lambda: len(said()) + sum(counts()) == UNCOLLECTED - 1, "every drop to be accounted"
+        )
+    assert len(said()) <= LOGGED_LINES * (len(counts()) + 1)

@@ -76,6 +76,10 @@ ACCEPT_BACKOFF = 0.5
 """Seconds a listener is not watched after accepting failed for lack of descriptors (or
 anything unexpected): retrying at once would spin the loop, and the connections already open are
 served meanwhile; half a second is short beside a client's connect timeout."""
+LOGGED_LINES = 3
+"""Two-port log lines about one reply (dropped because another waits, v1.0/v1.1; kept because
+its reply connection left) written per idle sweep (about a second); the rest are counted in
+one line at the sweep. 30,000 messages nobody collected wrote 29,999 lines (5.5 MB)."""
 REMEMBERED = 256
 """Persistent-protocol lines whose decoding is kept (forgotten all at once past it): a
 program's repeated messages (``u0``, ``w0-6``) then cost no decoding."""
@@ -459,6 +463,8 @@ class TwoPortServer(_Server):
         self.receiving: dict[_MessageConnection, None] = {}  # message connections, in order
         self.waiting: deque[_ReplyConnection] = deque()  # reply connections, oldest first
         self.dropped = 0  # replies dropped since the last sweep (logged there)
+        self.said = 0  # lines about one reply logged since the last sweep
+        self.unsaid = 0  # and those past :data:`LOGGED_LINES`, counted at the sweep
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A message connection (port_rx) or a reply connection (port_tx)."""
@@ -498,7 +504,7 @@ class TwoPortServer(_Server):
             earlier = itertools.takewhile(lambda p: p is not pending, self.pending)
             if any(p.future.done() for p in earlier):
                 self.pending.remove(pending)
-                log.info(
+                self.say(
                     "two-port: the reply to %r is dropped: an earlier reply is still waiting "
                     "to be collected, and SimMeR v1.0/v1.1 kept only one",
                     printable(pending.decoded.text or "?"),
@@ -520,8 +526,26 @@ class TwoPortServer(_Server):
                 self.pending.remove(p)
             reply.guard(functools.partial(reply.deliver, earlier))
 
+    def say(self, text: str, *args: object) -> None:
+        """Log a line about one reply, unless :data:`LOGGED_LINES` were since the last sweep
+        (then it is counted, and the count said at the sweep)."""
+        if self.said < LOGGED_LINES:
+            self.said += 1
+            log.info(text, *args)
+        else:
+            self.unsaid += 1
+
     def swept(self, now: float) -> None:
-        """Drop replies older than ``timeout``; log what was dropped since the last sweep."""
+        """Drop replies older than ``timeout``; log what was dropped since the last sweep, and
+        how many lines about single replies were not written."""
+        if self.unsaid:
+            log.info(
+                "two-port: %d more line(s) about dropped or uncollected replies since the last "
+                "count, not written (at most %d a second: LOGGED_LINES)",
+                self.unsaid,
+                LOGGED_LINES,
+            )
+        self.said = self.unsaid = 0
         kept = deque(
             p for p in self.pending if not p.future.done() or now - p.arrived < self.timeout
         )
@@ -623,7 +647,7 @@ class _ReplyConnection(_Connection):
         if self in two_port.waiting:
             two_port.waiting.remove(self)
         if unsent and not self.server.bus.closed:
-            log.info("%s left before its reply was sent; kept for the next one", self.client)
+            two_port.say("%s left before its reply was sent; kept for the next one", self.client)
             two_port.pending = deque(
                 sorted([*self.collected, *two_port.pending], key=lambda p: p.order)
             )
