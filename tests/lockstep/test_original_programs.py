@@ -116,6 +116,38 @@ def test_a_program_that_never_ends_its_line_is_not_waited_for_long(
     assert sim.time == pytest.approx(0.5, abs=sim.dt)
 
 
+READ_BEFORE_CLOSING = """
+import socket, sys
+for index in range(6):
+    with socket.create_connection(('127.0.0.1', 61200)) as out:
+        out.sendall([b'u1', b'u0,u1'][index % 2])
+        with socket.create_connection(('127.0.0.1', 61201)) as back:
+            reply = back.recv(1024)
+    if len(reply) != 4 * (index % 2 + 1):
+        sys.exit(f'message {index}: {reply!r} is not its reply')
+print('done')
+"""
+"""Reads each reply before it closes its send connection."""
+
+
+def test_a_program_that_reads_before_closing_its_send_connection_is_not_held_up(
+    tmp_path: Path,
+    caplog: pytest.LogCaptureFixture,
+    monkeypatch: pytest.MonkeyPatch,
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    # Its message is taken when its reply connection is accepted, so the shim's sync before
+    # the reply connection leaves it out instead of waiting SYNC_WAIT for it.
+    monkeypatch.setattr(runner, "SYNC_WAIT", 0.5)
+    program = tmp_path / "read_before_closing.py"
+    program.write_text(READ_BEFORE_CLOSING, encoding="utf-8")
+    served = run_program(Simulation.from_config(), f"{sys.executable} {program}", timeout=60)
+    printed = capfd.readouterr()
+    assert (served.ended_by, served.exit_status) == ("program", 0), printed.err
+    assert printed.out == "done\n"
+    assert "never arrived" not in caplog.text
+
+
 @pytest.mark.slow
 def test_a_sweep_of_a_send_then_sleep_program_is_the_same_at_any_worker_count(
     tmp_path: Path,

@@ -76,10 +76,10 @@ ACCEPT_BACKOFF = 0.5
 """Seconds a listener is not watched after accepting failed for lack of descriptors (or
 anything unexpected): retrying at once would spin the loop, and the connections already open are
 served meanwhile; half a second is short beside a client's connect timeout."""
-GRACE = 1 / 60
-"""Seconds a two-port reply connection with nothing to collect waits for a message whose
-connection was accepted before it and is still arriving (one step at 60 Hz), before it is
-closed empty as the original closed it; 0 under the lockstep clock."""
+LOGGED_LINES = 3
+"""Two-port log lines about one reply (dropped because another waits, v1.0/v1.1; kept because
+its reply connection left) written per idle sweep (about a second); the rest are counted in
+one line at the sweep. 30,000 messages nobody collected wrote 29,999 lines (5.5 MB)."""
 REMEMBERED = 256
 """Persistent-protocol lines whose decoding is kept (forgotten all at once past it): a
 program's repeated messages (``u0``, ``w0-6``) then cost no decoding."""
@@ -118,15 +118,20 @@ class _Connection:
         """Loop thread: flush, or read what arrived; False once closed."""
         if events & WRITE:
             self.flush()
-            return not self.closed
+        else:
+            self.read()
+        return not self.closed
+
+    def read(self) -> bool:
+        """Read what the kernel holds for this connection, once; False if it held nothing."""
         try:
             chunk = self.conn.recv(RECV_SIZE)
         except BlockingIOError:
-            return True
+            return False
         except OSError:
             chunk = b""
         self.received(chunk)
-        return not self.closed
+        return True
 
     def opened(self) -> None:
         """Called once the loop watches the connection (subclasses may start work here)."""
@@ -425,17 +430,19 @@ class TwoPortServer(_Server):
       waits is dropped (logged), as the original's one-reply transmit buffer dropped it;
     * nothing waiting: the connection is closed at once with nothing sent.
 
-    Better than the originals, a reply connection waits for the replies still being computed
-    to messages whose connection was accepted before its own (every waiting ``port_rx``
-    connection is accepted first, so a client's own message always counts), and, with nothing
-    else to collect, up to ``grace`` s for such a message still arriving: a client that reads
-    at once loses nothing. Under the lockstep clock ``grace`` is 0 (the program's messages are
-    all taken before its reply connection opens), so timing never decides. A reply
-    connection never takes the reply to a message accepted after it. Reply connections are
-    served in the order they came. Replies nobody collects are dropped after ``timeout`` s,
-    and past :data:`MAX_UNCLAIMED` the oldest goes, so memory stays bounded. A reply
-    connection that
-    hangs up before its replies are sent does not consume them: the next one gets them."""
+    Better than the originals, a reply connection is answered only after everything already
+    queued at ``port_rx`` is taken (:meth:`take_queued`: the connections waiting to be
+    accepted, then every byte and close waiting to be read), and it waits for the replies
+    still being computed to those messages. A client closes its message connection (or at
+    least has sent its message) before it opens its reply connection, so on this machine's
+    loopback its message is always among them, however busy the loop is: no timing decides
+    a reply, and a client never falls one reply behind. A message connection still open then
+    holds its message as it stands (the original took a message's first ``recv``); one that
+    has sent nothing is no message. A reply connection never takes the reply to a message
+    accepted after it. Reply connections are served in the order they came. Replies nobody
+    collects are dropped after ``timeout`` s, and past :data:`MAX_UNCLAIMED` the oldest goes,
+    so memory stays bounded. A reply connection that hangs up before its replies are sent does
+    not consume them: the next one gets them."""
 
     kind = "two-port"
 
@@ -448,16 +455,16 @@ class TwoPortServer(_Server):
         *,
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
-        grace: float = GRACE,
     ) -> None:
         super().__init__(bus, host, [port_rx, port_tx], timeout)
         self.port_rx, self.port_tx = self.ports
         self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
-        self.grace = grace
         self.pending: deque[_Pending] = deque()  # replies (or their futures) nobody collected
-        self.receiving: set[_MessageConnection] = set()  # message connections still sending
+        self.receiving: dict[_MessageConnection, None] = {}  # message connections, in order
         self.waiting: deque[_ReplyConnection] = deque()  # reply connections, oldest first
         self.dropped = 0  # replies dropped since the last sweep (logged there)
+        self.said = 0  # lines about one reply logged since the last sweep
+        self.unsaid = 0  # and those past :data:`LOGGED_LINES`, counted at the sweep
 
     def connection(self, conn: socket.socket, peer: str, index: int) -> _Connection:
         """A message connection (port_rx) or a reply connection (port_tx)."""
@@ -466,12 +473,20 @@ class TwoPortServer(_Server):
         return _ReplyConnection(self, conn, f"two-port {peer}")
 
     def _accept(self, index: int) -> bool:
-        """A reply connection is accepted only after every message connection waiting, so
-        that a client's message always comes before its reply connection in accept order."""
+        """A reply connection is accepted only after everything queued at ``port_rx`` is
+        taken, so that a client's message always comes before its reply connection."""
         if index == 1:
-            while self.accept_one(0):
-                pass
+            self.take_queued()
         return super()._accept(index)
+
+    def take_queued(self) -> None:
+        """Loop thread: accept every message connection waiting, then read every byte and
+        close waiting on each open one, until the kernel holds nothing more; a connection
+        that sent something and is still open then ends its message as it stands."""
+        while self.accept_one(0):
+            pass
+        for message in list(self.receiving):
+            message.guard(message.take_queued)
 
     def arrived(self, decoded: Decoded, order: int, client: str) -> None:
         """Loop thread: a whole message came in; execute it and hold its reply."""
@@ -489,7 +504,7 @@ class TwoPortServer(_Server):
             earlier = itertools.takewhile(lambda p: p is not pending, self.pending)
             if any(p.future.done() for p in earlier):
                 self.pending.remove(pending)
-                log.info(
+                self.say(
                     "two-port: the reply to %r is dropped: an earlier reply is still waiting "
                     "to be collected, and SimMeR v1.0/v1.1 kept only one",
                     printable(pending.decoded.text or "?"),
@@ -504,11 +519,6 @@ class TwoPortServer(_Server):
             earlier = [p for p in self.pending if p.order < reply.order]
             if any(not p.future.done() for p in earlier):
                 return  # answered soon: collected then
-            if not earlier and any(m.order < reply.order for m in self.receiving):
-                late = reply.opened_at + self.grace - time.monotonic()
-                if late > 0:  # a message still arriving: wait for it, a moment
-                    self.bus.call_later(late, self.collect)
-                    return
             self.waiting.popleft()
             if self.codec.keeps == "first":
                 earlier = earlier[:1]
@@ -516,8 +526,26 @@ class TwoPortServer(_Server):
                 self.pending.remove(p)
             reply.guard(functools.partial(reply.deliver, earlier))
 
+    def say(self, text: str, *args: object) -> None:
+        """Log a line about one reply, unless :data:`LOGGED_LINES` were since the last sweep
+        (then it is counted, and the count said at the sweep)."""
+        if self.said < LOGGED_LINES:
+            self.said += 1
+            log.info(text, *args)
+        else:
+            self.unsaid += 1
+
     def swept(self, now: float) -> None:
-        """Drop replies older than ``timeout``; log what was dropped since the last sweep."""
+        """Drop replies older than ``timeout``; log what was dropped since the last sweep, and
+        how many lines about single replies were not written."""
+        if self.unsaid:
+            log.info(
+                "two-port: %d more line(s) about dropped or uncollected replies since the last "
+                "count, not written (at most %d a second: LOGGED_LINES)",
+                self.unsaid,
+                LOGGED_LINES,
+            )
+        self.said = self.unsaid = 0
         kept = deque(
             p for p in self.pending if not p.future.done() or now - p.arrived < self.timeout
         )
@@ -543,14 +571,27 @@ class _MessageConnection(_Connection):
         self.data = bytearray()
 
     def opened(self) -> None:
-        """A reply connection accepted after this one waits for its message."""
-        self.two_port.receiving.add(self)
+        """Listed, so that a reply connection accepted after it takes what it sent first."""
+        self.two_port.receiving[self] = None
 
     def received(self, chunk: bytes) -> None:
         """Collect; at the end (or past the size limit) submit the message and close."""
         self.data += chunk
         if chunk and len(self.data) <= MAX_MESSAGE_BYTES:
             return
+        self.end()
+
+    def take_queued(self) -> None:
+        """A reply connection came: read everything the kernel holds; if the client has sent
+        something and not closed yet, its message is what it sent (it is reading its reply,
+        so it has said what it will say before it)."""
+        while not self.closed and self.read():
+            pass
+        if not self.closed and self.data:
+            self.end()
+
+    def end(self) -> None:
+        """Submit the message received (if any) and close."""
         if self.data:
             decoded = replace(self.two_port.codec.decode(bytes(self.data)), size=len(self.data))
             self.two_port.arrived(decoded, self.order, self.client)
@@ -559,13 +600,11 @@ class _MessageConnection(_Connection):
         self.close()
 
     def close(self) -> None:
-        """Close; a reply connection waiting for this message may now collect."""
+        """Close and no longer be listed."""
         if self.closed:
             return
         super().close()
-        self.two_port.receiving.discard(self)
-        if not self.server.bus.closed:
-            self.two_port.collect()
+        self.two_port.receiving.pop(self, None)
 
 
 class _ReplyConnection(_Connection):
@@ -576,7 +615,6 @@ class _ReplyConnection(_Connection):
         super().__init__(server, conn, client)
         self.two_port = server
         self.collected: list[_Pending] = []
-        self.opened_at = time.monotonic()
 
     def opened(self) -> None:
         """Queue up for the replies waiting."""
@@ -609,7 +647,7 @@ class _ReplyConnection(_Connection):
         if self in two_port.waiting:
             two_port.waiting.remove(self)
         if unsent and not self.server.bus.closed:
-            log.info("%s left before its reply was sent; kept for the next one", self.client)
+            two_port.say("%s left before its reply was sent; kept for the next one", self.client)
             two_port.pending = deque(
                 sorted([*self.collected, *two_port.pending], key=lambda p: p.order)
             )

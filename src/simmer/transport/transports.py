@@ -9,7 +9,7 @@ from simmer.config.models import SimConfig
 from simmer.options import RunOptions
 from simmer.transport.bus import CommandBus
 from simmer.transport.serial_pty import SerialServer
-from simmer.transport.tcp import GRACE, StreamServer, TwoPortServer
+from simmer.transport.tcp import StreamServer, TwoPortServer
 
 log = logging.getLogger("simmer.transport")
 
@@ -26,8 +26,7 @@ def is_loopback(host: str) -> bool:
 
 class Transports:
     """The two-port server, the stream server and (optionally) the virtual serial port, on the
-    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`);
-    on the lockstep clock no wall-clock grace anywhere."""
+    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`)."""
 
     def __init__(
         self, bus: CommandBus, config: SimConfig, options: RunOptions | None = None
@@ -48,7 +47,6 @@ class Transports:
             options.port_tx,
             codec=codec,
             timeout=settings.timeout,
-            grace=0.0 if options.lockstep else GRACE,
         )
         self.serial: SerialServer | None = None
         try:

@@ -18,6 +18,9 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
   synchronised (``!sync @N``) before a reply connection opens and before the program writes
   on another connection than the last, so the simulator takes messages in the order the
   program wrote them. A program that waits for each reply never needs the extra message.
+  Bytes on a two-port message connection still open when a reply connection opens are left
+  out of that count: the simulator takes them when it accepts the reply connection (a
+  program that reads its reply before closing its send connection).
 
 Only the standard library is used, so the program starts as fast as it would by hand. If the
 program's environment has a ``sitecustomize`` of its own, it is run afterwards.
@@ -89,19 +92,25 @@ class _Written:
         self.confirmed = 0
         self.last: Any = None  # the connection written to last (a weak reference or an fd)
         self.lock = threading.Lock()
+        self.two_port: weakref.WeakKeyDictionary[socket.socket, int] = weakref.WeakKeyDictionary()
+        """Bytes written on each two-port message connection (one closed is left out)."""
 
-    def ask(self, message: str) -> float:
-        """A clock message carrying the count: the simulator acts on it once it has taken
-        every byte written so far."""
-        written = self.total
+    def ask(self, message: str, written: int | None = None) -> float:
+        """A clock message carrying the count (default: every byte written so far): the
+        simulator acts on it once it has taken that many."""
+        written = self.total if written is None else written
         value = self.clock.ask(f"{message} @{written}")
         self.confirmed = max(self.confirmed, written)
         return value
 
-    def sync(self) -> None:
-        """Wait until the simulator has taken everything written so far (if anything new)."""
-        if self.total > self.confirmed:
-            self.ask("!sync")
+    def sync_before_reply(self) -> None:
+        """A reply connection is about to open: wait until the simulator has taken everything
+        written so far (if anything new) but what waits on a two-port message connection
+        still open, which the simulator takes when it accepts the reply connection."""
+        still_open = sum(size for sock, size in list(self.two_port.items()) if sock.fileno() >= 0)
+        written = self.total - still_open
+        if written > self.confirmed:
+            self.ask("!sync", written)
 
     def before(self, key: Any) -> None:
         """About to write on connection ``key``: first let the simulator take what was
@@ -113,6 +122,8 @@ class _Written:
     def wrote(self, key: Any, size: int) -> None:
         with self.lock:
             self.total += max(size, 0)
+            if key in self.two_port:
+                self.two_port[key] += max(size, 0)
         self.last = weakref.ref(key) if isinstance(key, socket.socket) else key
 
 
@@ -155,6 +166,7 @@ def _install(address: str) -> None:
     local = _LOCAL | {os.environ.get("SIMMER_HOST", "127.0.0.1")}
     message_ports = _ports("SIMMER_MESSAGE_PORTS")
     reply_ports = _ports("SIMMER_REPLY_PORTS")
+    two_port_rx = _ports("SIMMER_PORT_RX")
     roles: weakref.WeakKeyDictionary[socket.socket, str] = weakref.WeakKeyDictionary()
 
     def redirect(address: Any) -> tuple[Any, str | None]:
@@ -168,18 +180,22 @@ def _install(address: str) -> None:
     def connect(self: socket.socket, address: Any) -> None:
         target, role = redirect(address)
         if role == "reply":
-            written.sync()
+            written.sync_before_reply()
         real_connect(self, target)
         if role is not None:
             roles[self] = role
+        if role is not None and target[1] in two_port_rx:
+            written.two_port[self] = 0
 
     def connect_ex(self: socket.socket, address: Any) -> int:
         target, role = redirect(address)
         if role == "reply":
-            written.sync()
+            written.sync_before_reply()
         result = int(real_connect_ex(self, target))
         if role is not None:
             roles[self] = role
+        if role is not None and target[1] in two_port_rx:
+            written.two_port[self] = 0
         return result
 
     real_send = socket.socket.send
