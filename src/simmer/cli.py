@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.console import Console
+from rich.text import Text
 from typer import _click  # the click typer ships: its Command is what a command overrides
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
@@ -83,8 +84,11 @@ app = typer.Typer(
 _AS_COMMAND: list[bool] = []
 """Holds True when this process is the ``simmer`` command (:func:`main`), not a program that
 calls the app (a test): only then does ``run --program`` make it a subreaper."""
-out = Console(highlight=False, soft_wrap=True)
-err = Console(stderr=True, highlight=False, soft_wrap=True)
+out = Console(markup=False, emoji=False, highlight=False, soft_wrap=True)
+err = Console(stderr=True, markup=False, emoji=False, highlight=False, soft_wrap=True)
+"""What the command prints is data (paths, messages, keys, a program's output): neither markup
+(``[b]``) nor emoji codes (``:100:`` of ``robot.toml:100:``) are applied to it; a colour is a
+``style``."""
 
 
 class Clock(StrEnum):
@@ -150,7 +154,7 @@ def options(
 
 def _report_config_error(exc: ConfigError) -> None:
     count = len(exc.issues)
-    err.print(f"[bold red]{count} problem{'s' if count != 1 else ''} in {exc.source}:[/]")
+    err.print(f"{count} problem{'s' if count != 1 else ''} in {exc.source}:", style="bold red")
     for issue in exc.issues:
         err.print(f"  {issue.render(exc.source)}", markup=False)
 
@@ -159,7 +163,9 @@ def _report_config_warnings(config: SimConfig) -> None:
     """Print what an original config.py does that a native file may not (it still runs)."""
     count = len(config.warnings)
     if count:
-        err.print(f"[bold yellow]{count} warning{'s' if count != 1 else ''} in {config.source}:[/]")
+        err.print(
+            f"{count} warning{'s' if count != 1 else ''} in {config.source}:", style="bold yellow"
+        )
     for issue in config.warnings:
         err.print(f"  {issue.render(config.source)}", markup=False, style="yellow")
 
@@ -220,7 +226,7 @@ def check(
     if issues:
         _report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
-    out.print(f"[bold green]OK[/] {config}")
+    out.print(Text.assemble(("OK", "bold green"), f" {config}"))
     out.print(summarize(loaded), markup=False)
 
 
@@ -539,7 +545,7 @@ def run(
     try:
         served = serve(sim, options, echo=lambda line: out.print(line, markup=False))
     except SimmerError as exc:
-        err.print(f"[bold red]{exc}[/]")
+        err.print(str(exc), style="bold red")
         raise typer.Exit(1) from None
     except OSError as exc:
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
@@ -748,7 +754,11 @@ def convert(
     if output is None:
         out.print(text, markup=False, end="")
     else:
-        out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+        out.print(
+            Text.assemble(
+                ("wrote", "bold green"), f" {output}; check it with `simmer check {output}`"
+            )
+        )
 
 
 @app.command(
@@ -1145,7 +1155,7 @@ def console(
             framed=framed,
         )
     except ClientError as exc:
-        err.print(f"[bold red]{exc}[/]")
+        err.print(str(exc), style="bold red")
         raise typer.Exit(1) from None
     with client:
         run_console(client)
