@@ -6,7 +6,7 @@ import contextlib
 import errno
 import logging
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NoReturn
@@ -89,6 +89,42 @@ err = Console(stderr=True, markup=False, emoji=False, highlight=False, soft_wrap
 """What the command prints is data (paths, messages, keys, a program's output): neither markup
 (``[b]``) nor emoji codes (``:100:`` of ``robot.toml:100:``) are applied to it; a colour is a
 ``style``."""
+
+
+MAX_SIMULATED_SECONDS = 1e9
+"""Largest ``--seconds`` and ``--link-delay``: the longest ``!sleep`` (a command's
+``MAX_ABS_VALUE``), some 30 years of simulated time; NaN, infinities and negative numbers
+are refused too (``--seconds nan`` ran no step and reported success)."""
+MAX_WALL_SECONDS = 86_400.0
+"""Largest ``--timeout``: a day, as a configuration's ``timeout`` (its ``MAX_TIMEOUT``);
+longer waits overflow the system's timers."""
+MAX_WORKERS = 64
+"""Largest ``sweep --workers``: each worker process holds some 256 MB, so 64 of them hold
+16 GB, more than a lab machine has, and more workers than cores only wait their turn (a pool
+of 10**6 would start a process for each run of a sweep, up to 100,000)."""
+MAX_RECORD_LIMIT_MB = 1_048_576
+"""Largest ``--record-limit``: a tebibyte, more than a lab machine's disk (infinity
+overflowed the byte count)."""
+
+
+def _number_check(
+    flag: str, unit: str, high: float, limit: str, *, zero: bool = False, low: float = 0.0
+) -> Callable[[float | None], float | None]:
+    """A numeric flag's check, run before the number is used: finite, more than ``low`` (or
+    equal to it with ``zero``) and at most ``high`` (the constant named ``limit``); else one
+    plain line saying so."""
+
+    def check(value: float | None) -> float | None:
+        if value is None or ((low <= value if zero else low < value) and value <= high):
+            return value  # NaN fails both comparisons
+        least = f"{low:g} or more" if zero else f"more than {low:g}"
+        raise typer.BadParameter(
+            f"{value!r} {unit}; give a number {least} and at most {high:,.0f} ({limit}; "
+            "SimMeR's limits are in docs/limits.md)",
+            param_hint=flag,
+        )
+
+    return check
 
 
 class Clock(StrEnum):
@@ -280,7 +316,13 @@ def run(
     headless: Annotated[bool, typer.Option("--headless", help="Run without a window.")] = False,
     seconds: Annotated[
         float | None,
-        typer.Option(help="Stop after this many simulated seconds.", metavar="SECONDS"),
+        typer.Option(
+            help="Stop after this many simulated seconds.",
+            metavar="SECONDS",
+            callback=_number_check(
+                "--seconds", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS"
+            ),
+        ),
     ] = None,
     speed: Annotated[
         str | None,
@@ -294,7 +336,7 @@ def run(
     ] = None,
     seed: Annotated[
         int | None,
-        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N"),
+        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N", min=0),
     ] = None,
     host: Annotated[
         str | None,
@@ -381,7 +423,9 @@ def run(
         float | None,
         typer.Option(
             help="Lockstep: simulated seconds each message costs (default: one step).",
-            min=0,
+            callback=_number_check(
+                "--link-delay", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS", zero=True
+            ),
             show_default=False,
             metavar="SECONDS",
         ),
@@ -391,7 +435,7 @@ def run(
         typer.Option(
             help="Stop the run (and the program's whole process tree) after this many "
             "wall-clock seconds; exit status 124.",
-            min=0,
+            callback=_number_check("--timeout", "seconds", MAX_WALL_SECONDS, "MAX_WALL_SECONDS"),
             show_default=False,
             metavar="SECONDS",
         ),
@@ -458,7 +502,9 @@ def run(
         typer.Option(
             help="Megabytes events.jsonl and trace.csv of --record may hold together; past it "
             "the recording stops and the run goes on.",
-            min=1,
+            callback=_number_check(
+                "--record-limit", "MB", MAX_RECORD_LIMIT_MB, "MAX_RECORD_LIMIT_MB", zero=True, low=1
+            ),
         ),
     ] = 256,
 ) -> None:
@@ -887,7 +933,9 @@ MaxSecondsOption = Annotated[
         "--max-seconds",
         help="Re-simulate at most this many simulated seconds (default: 3600); a folder whose "
         "events go further is refused.",
-        min=0,
+        callback=_number_check(
+            "--max-seconds", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS", zero=True
+        ),
         show_default=False,
     ),
 ]
@@ -1042,7 +1090,9 @@ def sweep(
         int | None,
         typer.Option(
             help="Worker processes (default: one per core).",
-            min=1,
+            callback=_number_check(
+                "--workers", "workers", MAX_WORKERS, "MAX_WORKERS", zero=True, low=1
+            ),
             show_default=False,
             metavar="N",
         ),
