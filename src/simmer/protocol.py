@@ -530,6 +530,10 @@ def parse_clock(text: str) -> ClockMessage:
         seconds = float(words[1])
         if 0 <= seconds <= MAX_ABS_VALUE:
             return ClockMessage("sleep", seconds, after)
+        raise ValueError(
+            f"{printable(text)!r}: a sleep of {words[1]} s is refused; it must be 0 to "
+            f"{MAX_ABS_VALUE:g} s of simulated time (MAX_ABS_VALUE, as a command's value)"
+        )
     raise ValueError(
         f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time' or "
         "'!sync', each optionally followed by ' @BYTES'"
