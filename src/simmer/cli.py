@@ -95,6 +95,9 @@ MAX_SIMULATED_SECONDS = 1e9
 """Largest ``--seconds`` and ``--link-delay``: the longest ``!sleep`` (a command's
 ``MAX_ABS_VALUE``), some 30 years of simulated time; NaN, infinities and negative numbers
 are refused too (``--seconds nan`` ran no step and reported success)."""
+SPEED_RANGE = (0.01, 1000.0)
+"""``--speed`` as a multiple of real time, 'max' aside: the window's keys go from 1/8 to 32; a
+speed of 1e-300 never took a second step, and above 1,000 only 'max' is faster."""
 MAX_WALL_SECONDS = 86_400.0
 """Largest ``--timeout``: a day, as a configuration's ``timeout`` (its ``MAX_TIMEOUT``);
 longer waits overflow the system's timers."""
@@ -522,6 +525,13 @@ def run(
         pace = parse_speed(speed)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    low, high = SPEED_RANGE
+    if pace is not None and not low <= pace <= high:
+        raise typer.BadParameter(
+            f"{speed}: from {low:g} to {high:g} times real time, or 'max' (SPEED_RANGE; "
+            "SimMeR's limits are in docs/limits.md)",
+            param_hint="--speed",
+        )
     if video is not None:
         _check_video(video, force=force)
     if program is not None:  # this run's own free ports, so that runs can share a machine

@@ -46,6 +46,8 @@ def test_seconds_must_be_a_positive_finite_number(tmp_path: Path, value: str) ->
         ("--timeout", "nan", "MAX_WALL_SECONDS"),
         ("--record-limit", "inf", "MAX_RECORD_LIMIT_MB"),
         ("--record-limit", "nan", "MAX_RECORD_LIMIT_MB"),
+        ("--speed", "1e-300", "SPEED_RANGE"),
+        ("--speed", "1e308", "SPEED_RANGE"),
     ],
 )
 def test_run_flags_are_finite_and_bounded(flag: str, value: str, limit: str) -> None:
