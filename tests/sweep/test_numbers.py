@@ -152,3 +152,11 @@ def test_the_issues_sweep_is_one_plain_line(tmp_path: Path) -> None:
     assert "Traceback" not in done.stderr
     assert "MAX_SAMPLE_NUMBER" in done.stderr
     assert "drives.w0.error.y" in done.stderr
+
+
+def test_an_integer_too_long_for_python_is_one_line(tmp_path: Path) -> None:
+    path = tmp_path / "sweep.toml"
+    path.write_text(f"seeds = {'9' * 5000}\n", encoding="utf-8")
+    with pytest.raises(SweepError, match="a number too long to read") as refused:
+        load_sweep(path)
+    assert "\n" not in str(refused.value)
