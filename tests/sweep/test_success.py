@@ -1,6 +1,6 @@
 """A success condition that cannot work is refused before the first run, with the sweep file,
 its line and the key (``target < 5`` made every run ``crashed: TypeError``; ``target *
-1000000000 == 0`` built a gigabyte string in each), and evaluation builds nothing large."""
+1000000000 == 0`` built a 2 GB string in each), and evaluation builds nothing large."""
 
 from __future__ import annotations
 
