@@ -6,13 +6,14 @@ import contextlib
 import errno
 import logging
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 from rich.console import Console
+from rich.text import Text
 from typer import _click  # the click typer ships: its Command is what a command overrides
 from typer.core import TyperArgument, TyperCommand, TyperGroup, TyperOption
 
@@ -83,8 +84,50 @@ app = typer.Typer(
 _AS_COMMAND: list[bool] = []
 """Holds True when this process is the ``simmer`` command (:func:`main`), not a program that
 calls the app (a test): only then does ``run --program`` make it a subreaper."""
-out = Console(highlight=False, soft_wrap=True)
-err = Console(stderr=True, highlight=False, soft_wrap=True)
+out = Console(markup=False, emoji=False, highlight=False, soft_wrap=True)
+err = Console(stderr=True, markup=False, emoji=False, highlight=False, soft_wrap=True)
+"""What the command prints is data (paths, messages, keys, a program's output): neither markup
+(``[b]``) nor emoji codes (``:100:`` of ``robot.toml:100:``) are applied to it; a colour is a
+``style``."""
+
+
+MAX_SIMULATED_SECONDS = 1e9
+"""Largest ``--seconds`` and ``--link-delay``: the longest ``!sleep`` (a command's
+``MAX_ABS_VALUE``), some 30 years of simulated time; NaN, infinities and negative numbers
+are refused too (``--seconds nan`` ran no step and reported success)."""
+SPEED_RANGE = (0.01, 1000.0)
+"""``--speed`` as a multiple of real time, 'max' aside: the window's keys go from 1/8 to 32; a
+speed of 1e-300 never took a second step, and above 1,000 only 'max' is faster."""
+MAX_WALL_SECONDS = 86_400.0
+"""Largest ``--timeout``: a day, as a configuration's ``timeout`` (its ``MAX_TIMEOUT``);
+longer waits overflow the system's timers."""
+MAX_WORKERS = 64
+"""Largest ``sweep --workers``: each worker process holds some 256 MB, so 64 of them hold
+16 GB, more than a lab machine has, and more workers than cores only wait their turn (a pool
+of 10**6 would start a process for each run of a sweep, up to 100,000)."""
+MAX_RECORD_LIMIT_MB = 1_048_576
+"""Largest ``--record-limit``: a tebibyte, more than a lab machine's disk (infinity
+overflowed the byte count)."""
+
+
+def _number_check(
+    flag: str, unit: str, high: float, limit: str, *, zero: bool = False, low: float = 0.0
+) -> Callable[[float | None], float | None]:
+    """A numeric flag's check, run before the number is used: finite, more than ``low`` (or
+    equal to it with ``zero``) and at most ``high`` (the constant named ``limit``); else one
+    plain line saying so."""
+
+    def check(value: float | None) -> float | None:
+        if value is None or ((low <= value if zero else low < value) and value <= high):
+            return value  # NaN fails both comparisons
+        least = f"{low:g} or more" if zero else f"more than {low:g}"
+        raise typer.BadParameter(
+            f"{value!r} {unit}; give a number {least} and at most {high:,.0f} ({limit}; "
+            "SimMeR's limits are in docs/limits.md)",
+            param_hint=flag,
+        )
+
+    return check
 
 
 class Clock(StrEnum):
@@ -150,7 +193,7 @@ def options(
 
 def _report_config_error(exc: ConfigError) -> None:
     count = len(exc.issues)
-    err.print(f"[bold red]{count} problem{'s' if count != 1 else ''} in {exc.source}:[/]")
+    err.print(f"{count} problem{'s' if count != 1 else ''} in {exc.source}:", style="bold red")
     for issue in exc.issues:
         err.print(f"  {issue.render(exc.source)}", markup=False)
 
@@ -159,7 +202,9 @@ def _report_config_warnings(config: SimConfig) -> None:
     """Print what an original config.py does that a native file may not (it still runs)."""
     count = len(config.warnings)
     if count:
-        err.print(f"[bold yellow]{count} warning{'s' if count != 1 else ''} in {config.source}:[/]")
+        err.print(
+            f"{count} warning{'s' if count != 1 else ''} in {config.source}:", style="bold yellow"
+        )
     for issue in config.warnings:
         err.print(f"  {issue.render(config.source)}", markup=False, style="yellow")
 
@@ -220,7 +265,7 @@ def check(
     if issues:
         _report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
-    out.print(f"[bold green]OK[/] {config}")
+    out.print(Text.assemble(("OK", "bold green"), f" {config}"))
     out.print(summarize(loaded), markup=False)
 
 
@@ -274,7 +319,13 @@ def run(
     headless: Annotated[bool, typer.Option("--headless", help="Run without a window.")] = False,
     seconds: Annotated[
         float | None,
-        typer.Option(help="Stop after this many simulated seconds.", metavar="SECONDS"),
+        typer.Option(
+            help="Stop after this many simulated seconds.",
+            metavar="SECONDS",
+            callback=_number_check(
+                "--seconds", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS"
+            ),
+        ),
     ] = None,
     speed: Annotated[
         str | None,
@@ -288,7 +339,7 @@ def run(
     ] = None,
     seed: Annotated[
         int | None,
-        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N"),
+        typer.Option(help="Noise seed (overrides the configuration's).", metavar="N", min=0),
     ] = None,
     host: Annotated[
         str | None,
@@ -375,7 +426,9 @@ def run(
         float | None,
         typer.Option(
             help="Lockstep: simulated seconds each message costs (default: one step).",
-            min=0,
+            callback=_number_check(
+                "--link-delay", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS", zero=True
+            ),
             show_default=False,
             metavar="SECONDS",
         ),
@@ -385,7 +438,7 @@ def run(
         typer.Option(
             help="Stop the run (and the program's whole process tree) after this many "
             "wall-clock seconds; exit status 124.",
-            min=0,
+            callback=_number_check("--timeout", "seconds", MAX_WALL_SECONDS, "MAX_WALL_SECONDS"),
             show_default=False,
             metavar="SECONDS",
         ),
@@ -452,7 +505,9 @@ def run(
         typer.Option(
             help="Megabytes events.jsonl and trace.csv of --record may hold together; past it "
             "the recording stops and the run goes on.",
-            min=1,
+            callback=_number_check(
+                "--record-limit", "MB", MAX_RECORD_LIMIT_MB, "MAX_RECORD_LIMIT_MB", zero=True, low=1
+            ),
         ),
     ] = 256,
 ) -> None:
@@ -470,6 +525,13 @@ def run(
         pace = parse_speed(speed)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--speed") from None
+    low, high = SPEED_RANGE
+    if pace is not None and not low <= pace <= high:
+        raise typer.BadParameter(
+            f"{speed}: from {low:g} to {high:g} times real time, or 'max' (SPEED_RANGE; "
+            "SimMeR's limits are in docs/limits.md)",
+            param_hint="--speed",
+        )
     if video is not None:
         _check_video(video, force=force)
     if program is not None:  # this run's own free ports, so that runs can share a machine
@@ -539,7 +601,7 @@ def run(
     try:
         served = serve(sim, options, echo=lambda line: out.print(line, markup=False))
     except SimmerError as exc:
-        err.print(f"[bold red]{exc}[/]")
+        err.print(str(exc), style="bold red")
         raise typer.Exit(1) from None
     except OSError as exc:
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
@@ -748,7 +810,11 @@ def convert(
     if output is None:
         out.print(text, markup=False, end="")
     else:
-        out.print(f"[bold green]wrote[/] {output}; check it with `simmer check {output}`")
+        out.print(
+            Text.assemble(
+                ("wrote", "bold green"), f" {output}; check it with `simmer check {output}`"
+            )
+        )
 
 
 @app.command(
@@ -877,7 +943,9 @@ MaxSecondsOption = Annotated[
         "--max-seconds",
         help="Re-simulate at most this many simulated seconds (default: 3600); a folder whose "
         "events go further is refused.",
-        min=0,
+        callback=_number_check(
+            "--max-seconds", "seconds", MAX_SIMULATED_SECONDS, "MAX_SIMULATED_SECONDS", zero=True
+        ),
         show_default=False,
     ),
 ]
@@ -1032,7 +1100,9 @@ def sweep(
         int | None,
         typer.Option(
             help="Worker processes (default: one per core).",
-            min=1,
+            callback=_number_check(
+                "--workers", "workers", MAX_WORKERS, "MAX_WORKERS", zero=True, low=1
+            ),
             show_default=False,
             metavar="N",
         ),
@@ -1145,7 +1215,7 @@ def console(
             framed=framed,
         )
     except ClientError as exc:
-        err.print(f"[bold red]{exc}[/]")
+        err.print(str(exc), style="bold red")
         raise typer.Exit(1) from None
     with client:
         run_console(client)

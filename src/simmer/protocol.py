@@ -110,6 +110,16 @@ def _parse_lenient(text: str, stripped: str) -> Command:
     return _in_range(Command(text, device, value, lenient=rules), raw)
 
 
+def decimal_number(raw: str) -> float | None:
+    """``raw`` read as a command's value is (strict parsing): a decimal number in ASCII digits
+    within ±:data:`MAX_ABS_VALUE`; None otherwise (``1_0``, ``１２``, ``٥``, ``nan``, ``1e400``,
+    which ``float()`` reads)."""
+    if not _NUMBER.fullmatch(raw):
+        return None
+    value = float(raw)
+    return value if abs(value) <= MAX_ABS_VALUE else None
+
+
 def _in_range(command: Command, raw: str) -> Command:
     """Refuse NaN, infinities and values beyond ±1e9 (no drive or sensor means them)."""
     if math.isfinite(command.value) and abs(command.value) <= MAX_ABS_VALUE:
@@ -520,6 +530,10 @@ def parse_clock(text: str) -> ClockMessage:
         seconds = float(words[1])
         if 0 <= seconds <= MAX_ABS_VALUE:
             return ClockMessage("sleep", seconds, after)
+        raise ValueError(
+            f"{printable(text)!r}: a sleep of {words[1]} s is refused; it must be 0 to "
+            f"{MAX_ABS_VALUE:g} s of simulated time (MAX_ABS_VALUE, as a command's value)"
+        )
     raise ValueError(
         f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time' or "
         "'!sync', each optionally followed by ' @BYTES'"

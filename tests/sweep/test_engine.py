@@ -40,7 +40,11 @@ def children() -> list[Any]:
 def cluster() -> Any:
     """A local Dask cluster of two worker processes with one thread each, for the module."""
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",
     ) as running:
         yield running
     assert not children()  # its workers are gone

@@ -128,10 +128,10 @@ def test_a_drawn_value_that_does_not_validate_is_an_invalid_run(tmp_path: Path) 
     assert all(row["status"] == "ok" for row in rows if row[NOISE] != "lots")
 
 
-def test_a_sweep_file_mistake_names_the_file(tmp_path: Path) -> None:
+def test_a_sweep_file_mistake_names_the_file_and_line(tmp_path: Path) -> None:
     sweep = tmp_path / "my_sweep.toml"
     sweep.write_text(f'config = "{LAB1}"\nprogram = "python x.py"\nkeep = "failure"\n')
-    with pytest.raises(SweepError, match=r"my_sweep\.toml: keep: .*did you mean 'failures'"):
+    with pytest.raises(SweepError, match=r"my_sweep\.toml:3: keep: .*did you mean 'failures'"):
         load_sweep(sweep)
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from simmer.geometry import Pose
 from simmer.localize.belief import ESTIMATES_PER_SECOND, SHOWS_PER_SECOND, parse_belief
 from simmer.localize.mapdata import map_data
-from simmer.protocol import printable
+from simmer.protocol import MAX_ABS_VALUE, decimal_number, printable
 from simmer.world.events import BeliefEvent, EstimateEvent
 from simmer.world.simulation import Simulation
 
@@ -79,14 +79,14 @@ class Localization:
             return [], json.dumps(map_data(self.sim), separators=(",", ":"))
         if word == "show":
             return [float(self.show(rest, client))], None
-        if word == "pose":
+        if word == "pose":  # numbers as a command's (1_0 and ١٢ are not numbers there)
             parts = rest.split()
-            try:
-                values = [float(p) for p in parts]
-            except ValueError:
-                values = []
-            if len(values) != 3 or not all(map(math.isfinite, values)):
-                raise ValueError(f"{printable(text[:60])!r}: write %pose X Y HEADING")
+            values = [v for v in map(decimal_number, parts) if v is not None]
+            if len(parts) != 3 or len(values) != 3:
+                raise ValueError(
+                    f"{printable(text[:60])!r}: write %pose X Y HEADING, three decimal numbers "
+                    f"in ASCII digits within ±{MAX_ABS_VALUE:g} (MAX_ABS_VALUE)"
+                )
             return [0.0 if self.estimate(Pose(*values), client) else -1.0], None
         raise ValueError(
             f"{printable(text[:60])!r} is not a localization message: '%maze', '%show JSON' "

@@ -217,6 +217,11 @@ class DaskExecutor(Executor):
             self.cluster.close()
 
 
+LOOPBACK = "127.0.0.1"
+"""Where a local Dask cluster listens (scheduler, workers, dashboard), as every other socket
+of SimMeR does: a cluster reachable from the network would run whatever task it is sent."""
+
+
 def dask_engine(address: str | None = None, workers: int | None = None) -> Engine:
     """The executor of a Dask cluster at ``address``, or of a local cluster of ``workers``
     processes (default: one per core) with one thread each, closed with the sweep; needs
@@ -233,8 +238,12 @@ def dask_engine(address: str | None = None, workers: int | None = None) -> Engin
         if address is not None:
             return DaskExecutor(distributed.Client(address))
         cluster = distributed.LocalCluster(
-            n_workers=count, threads_per_worker=1, processes=True, dashboard_address=":0"
-        )  # a free port: another cluster may have Dask's usual one
+            n_workers=count,
+            threads_per_worker=1,
+            processes=True,
+            host=LOOPBACK,  # the scheduler and the workers: this machine only
+            dashboard_address=f"{LOOPBACK}:0",  # ":0" bound every interface; a free port
+        )
         try:
             client = distributed.Client(cluster)
             client.wait_for_workers(count)

@@ -101,6 +101,15 @@ MAX_SWEEP_FILE_BYTES = 1_000_000
 SETTINGS_CHECKED = 64
 """Grid combinations :meth:`SweepSpec.check_settings` builds at most beyond one per value."""
 LIMITS = "SimMeR's limits are in docs/limits.md"
+MAX_SAMPLE_NUMBER = 1e9
+"""Largest size of a ``uniform`` bound, a ``normal`` mean or standard deviation: a command's
+value has the same bound, and wider ones overflowed the draw (``uniform = [-1e308, 1e308]``
+spans more than a float holds). Checked before any arithmetic, huge integers and infinities
+included."""
+MAX_LIMIT_SECONDS = 86_400.0
+"""Largest ``seconds`` and ``wall_seconds`` of a run: a day (the configuration's ``timeout``
+has the same bound), longer than any run of a sweep; beyond it the step count and the
+system's timers overflow."""
 
 
 @dataclass(frozen=True)
@@ -305,16 +314,33 @@ def load_sweep(path: str | Path) -> SweepSpec:
     try:
         text = _read_text(path)
         data = tomllib.loads(_short_keys(text, path))
+    except SweepError:
+        raise
     except (OSError, UnicodeDecodeError) as exc:
         raise SweepError(f"cannot read {path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SweepError(f"{path} is not valid TOML: {exc}") from None
     except RecursionError:
         raise SweepError(f"{path}: tables or lists nested too deep to read") from None
+    except ValueError as exc:  # an integer of more digits than Python converts (4,300)
+        raise SweepError(f"{path} holds a number too long to read: {exc}") from None
     try:
         return sweep_from_dict(data, path.resolve().parent)
     except SweepError as exc:
-        raise SweepError(f"{path}: {exc}") from None
+        raise SweepError(f"{_where(path, text, str(exc))}: {exc}") from None
+
+
+def _where(path: Path, text: str, message: str) -> str:
+    """``path:line`` of the top-level key a message is about (``success: ...``), as a
+    configuration's problems are placed, or ``path`` if it names none."""
+    key = message.partition(":")[0]
+    if key in KNOWN_KEYS:
+        for number, line in enumerate(text.splitlines(), 1):
+            if line.lstrip().startswith("["):
+                break  # the tables begin: top-level keys come before them
+            if re.match(rf"\s*[\"']?{key}[\"']?\s*=", line):
+                return f"{path}:{number}"
+    return str(path)
 
 
 def _short_keys(text: str, path: Path) -> str:
@@ -625,9 +651,13 @@ def _distribution(key: str, spec: Any, grid: set[str]) -> Distribution:
         not isinstance(values, list)
         or len(values) != 2
         or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
-        or not all(math.isfinite(v) for v in values)
     ):
-        raise SweepError(f"{where}: {DISTRIBUTIONS[kind]}, two numbers, not {values!r}")
+        raise SweepError(f"{where}: {DISTRIBUTIONS[kind]}, two numbers, not {_shown(values)}")
+    if not all(-MAX_SAMPLE_NUMBER <= v <= MAX_SAMPLE_NUMBER for v in values):  # NaN too
+        raise SweepError(
+            f"{where}: {DISTRIBUTIONS[kind]}, numbers from {-MAX_SAMPLE_NUMBER:,.0f} to "
+            f"{MAX_SAMPLE_NUMBER:,.0f} (MAX_SAMPLE_NUMBER; {LIMITS}), not {_shown(values)}"
+        )
     first, second = (float(v) for v in values)
     if kind == "uniform" and first > second:
         raise SweepError(f"{where}: uniform = [low, high] with low <= high, not {values!r}")
@@ -640,9 +670,26 @@ def _limit(data: Mapping[str, Any], name: str, default: float | None) -> float |
     value = data.get(name, default)
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < math.inf:
-        raise SweepError(f"{name}: a number of seconds more than 0, not {value!r}")
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not 0 < value <= MAX_LIMIT_SECONDS  # compared before float(): 10**400 is an int
+    ):
+        raise SweepError(
+            f"{name}: a number of seconds more than 0 and at most {MAX_LIMIT_SECONDS:,.0f} "
+            f"(MAX_LIMIT_SECONDS; {LIMITS}), not {_shown(value)}"
+        )
     return float(value)
+
+
+def _shown(value: Any) -> str:
+    """A value of the sweep file as an error message shows it: its first 80 characters (an
+    integer of 10,000 digits is refused by ``repr`` itself)."""
+    try:
+        text = repr(value)
+    except ValueError:
+        return "a number too long to show"
+    return text if len(text) <= 80 else f"{text[:77]}..."
 
 
 def _checked_success(text: Any) -> str:

@@ -68,6 +68,11 @@ PROJECT_FIELDS = (
 """A project run's fields besides (:class:`~simmer.world.outcome.ProjectReport`): columns of a
 project sweep's results.csv, and names a success condition may use
 (``delivered and collisions == 0``); in another run they have no value."""
+TEXT_FIELDS = frozenset({"target", "wrong_zone"})
+"""Fields whose value is text (a zone's name, or none): a condition may only test whether one
+is set (``not wrong_zone``). Arithmetic or a comparison on one failed in every run
+(``target < 5``: a TypeError) or built a string of gigabytes (``target * 1000000000``), so it
+is refused before the first run; every other field is a number (true/false counting 1/0)."""
 FAILURES = {
     "collision": "collided with a wall or the block",
     "timeout": "stopped by the simulated-time or the wall-clock limit",
@@ -146,6 +151,28 @@ def success_condition(text: str) -> Callable[[Mapping[str, Any]], bool]:
     return lambda fields: bool(_evaluate(tree.body, fields))
 
 
+def _text_field(node: ast.expr) -> str | None:
+    """The text field ``node``'s value may be (see :data:`TEXT_FIELDS`): the field itself,
+    or one an ``and``/``or`` may give; None if it is a number."""
+    if isinstance(node, ast.Name) and node.id in TEXT_FIELDS:
+        return node.id
+    if isinstance(node, ast.BoolOp):
+        return next(filter(None, map(_text_field, node.values)), None)
+    return None
+
+
+def _numbers_only(operands: list[ast.expr], node: ast.expr, text: str) -> None:
+    """Refuse arithmetic or a comparison of which an operand may be text."""
+    for operand in operands:
+        name = _text_field(operand)
+        if name is not None:
+            shown = ast.get_source_segment(text.strip(), node) or type(node).__name__
+            raise SweepError(
+                f"success: {shown!r}: {name} is a zone's name, not a number; it can only be "
+                f"tested as true or false (`{name} and ...`, `not {name}`)"
+            )
+
+
 def succeeded(condition: str, outcome: Mapping[str, Any] | None) -> bool:
     """Whether a run with ``outcome`` (None: the run had none) meets ``condition``."""
     return outcome is not None and success_condition(condition)(flat_outcome(outcome))
@@ -166,6 +193,11 @@ def _check(node: ast.expr, text: str, depth: int) -> None:
         return
     if isinstance(node, ast.Constant):
         if isinstance(node.value, int | float):  # bool included
+            if _number(node.value) is None:
+                raise SweepError(
+                    f"success: {ast.get_source_segment(text.strip(), node)!s:.40}... is too "
+                    "large a number (at most about 1e308)"
+                )
             return
     elif isinstance(node, ast.BoolOp):
         for value in node.values:
@@ -173,14 +205,18 @@ def _check(node: ast.expr, text: str, depth: int) -> None:
         return
     elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not | ast.USub):
         _check(node.operand, text, depth)
+        if isinstance(node.op, ast.USub):
+            _numbers_only([node.operand], node, text)
         return
     elif isinstance(node, ast.Compare) and all(type(op) in _COMPARE for op in node.ops):
         for value in (node.left, *node.comparators):
             _check(value, text, depth)
+        _numbers_only([node.left, *node.comparators], node, text)
         return
     elif isinstance(node, ast.BinOp) and type(node.op) in _ARITHMETIC:
         _check(node.left, text, depth)
         _check(node.right, text, depth)
+        _numbers_only([node.left, node.right], node, text)
         return
     shown = ast.get_source_segment(text.strip(), node) or type(node).__name__
     raise SweepError(
@@ -188,11 +224,23 @@ def _check(node: ast.expr, text: str, depth: int) -> None:
     )
 
 
+def _number(value: Any) -> Any:
+    """A field's or a constant's value as evaluation uses it: a number as a float (so
+    arithmetic never builds a huge integer, and a run's field of any size cannot overflow
+    it), text as it is, None for no value (or a number no float holds)."""
+    if isinstance(value, int | float):
+        try:
+            return float(value)
+        except OverflowError:
+            return None
+    return value
+
+
 def _evaluate(node: ast.expr, fields: Mapping[str, Any]) -> Any:
     if isinstance(node, ast.Name):
-        return {"true": True, "false": False}.get(node.id, fields.get(node.id))
+        return {"true": 1.0, "false": 0.0}.get(node.id, _number(fields.get(node.id)))
     if isinstance(node, ast.Constant):
-        return node.value
+        return _number(node.value)
     if isinstance(node, ast.BoolOp):
         values = (_evaluate(value, fields) for value in node.values)
         return all(values) if isinstance(node.op, ast.And) else any(values)

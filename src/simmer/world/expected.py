@@ -184,18 +184,27 @@ def parse_headings(text: str) -> FloatArray:
         raise ValueError(
             f"headings {text!r}: write START:STOP:STEP in degrees, e.g. 0:360:1"
         ) from None
-    if not all(map(math.isfinite, (start, stop, step))) or step <= 0 or stop <= start:
-        raise ValueError(f"headings {text!r}: STEP must be positive and STOP above START")
-    count = math.ceil((stop - start) / step - 1e-9)
-    if count > MAX_HEADINGS:
+    if not all(-MAX_HEADING_DEGREES <= value <= MAX_HEADING_DEGREES for value in (start, stop)):
         raise ValueError(
-            f"headings {text!r}: {count} headings, over {MAX_HEADINGS}; use a larger STEP"
+            f"headings {text!r}: START and STOP are degrees from {-MAX_HEADING_DEGREES:,.0f} to "
+            f"{MAX_HEADING_DEGREES:,.0f} (MAX_HEADING_DEGREES), e.g. 0:360:1"
         )
+    if not math.isfinite(step) or step <= 0 or stop <= start:
+        raise ValueError(f"headings {text!r}: STEP must be positive and STOP above START")
+    if (stop - start) / step > MAX_HEADINGS:  # before ceil(): a tiny STEP makes infinity
+        raise ValueError(
+            f"headings {text!r}: more than {MAX_HEADINGS} headings (MAX_HEADINGS); use a "
+            "larger STEP"
+        )
+    count = max(1, math.ceil((stop - start) / step - 1e-9))  # START at least
     return start + step * np.arange(count, dtype=np.float64)
 
 
 MAX_HEADINGS = 3600
 """Most headings in a table (a tenth of a degree)."""
+MAX_HEADING_DEGREES = 3600.0
+"""Largest START or STOP of a table's headings, either sign (ten turns): beyond a turn a
+heading only repeats one, and ``-1e308:1e308`` overflowed the count."""
 MAX_TABLE_VALUES = 200_000_000
 """Most readings in a table (1.6 GB as float64 while it is made); ``--step`` larger makes
 fewer."""
@@ -206,8 +215,18 @@ def grid(sim: Simulation, step: float) -> tuple[FloatArray, FloatArray]:
     if not (math.isfinite(step) and step > 0):
         raise ValueError(f"step must be a positive number of inches, not {step!r}")
     maze = sim.maze
+    if (maze.width / step) * (maze.height / step) > MAX_TABLE_VALUES:  # before arange()
+        raise ValueError(
+            f"--step {step!r} makes more positions than the limit of {MAX_TABLE_VALUES:,} "
+            "readings (MAX_TABLE_VALUES); use a larger --step"
+        )
     xs = np.arange(step / 2.0, maze.width, step)
     ys = np.arange(step / 2.0, maze.height, step)
+    if not (len(xs) and len(ys)):
+        raise ValueError(
+            f"--step {step!r} leaves no position inside the maze ({maze.width:g} x "
+            f"{maze.height:g} in); use a smaller --step"
+        )
     return xs, ys
 
 

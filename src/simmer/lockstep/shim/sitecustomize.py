@@ -41,6 +41,11 @@ from collections.abc import Callable
 from typing import Any
 
 _HEADER = struct.Struct("<BH")
+MAX_SLEEP = 1e9
+"""The longest ``time.sleep`` in simulated seconds: the simulator's ``MAX_ABS_VALUE`` (this
+module imports nothing of SimMeR's). A longer one raises OverflowError here, as Python's own
+``time.sleep`` does past its limit: said at the call, in the program's traceback, rather than
+a "refused clock message" from the simulator's log."""
 _LOCAL = {"127.0.0.1", "localhost", "::1"}
 
 
@@ -142,8 +147,15 @@ def _install(address: str) -> None:
     def sleep(seconds: float) -> None:
         """Advance the simulation by ``seconds`` (lockstep) and return when it has."""
         seconds = float(seconds)
+        if math.isnan(seconds):
+            raise ValueError("Invalid value NaN (not a number)")  # as Python's own sleep says
         if seconds < 0:
             raise ValueError("sleep length must be non-negative")
+        if seconds > MAX_SLEEP:
+            raise OverflowError(
+                f"sleep length {seconds:g} s is too large: under SimMeR's lockstep clock a sleep "
+                f"is at most {MAX_SLEEP:g} simulated seconds (MAX_SLEEP, as a command's value)"
+            )
         written.ask(f"!sleep {seconds!r}")
 
     def now() -> float:
