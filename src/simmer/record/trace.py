@@ -160,10 +160,11 @@ class TraceWriter:
             self._flush()
 
     def _flush(self) -> None:
-        """Write the rows made since the last flush, in one write."""
-        if self._rows:
-            self._write("".join(self._rows), self._made - self.rows)
-            self._rows.clear()
+        """Write the rows made since the last flush, in one write; they are let go of before
+        it, so that a flush cut short (by an exception) cannot write them a second time."""
+        rows, self._rows = self._rows, []
+        if rows:
+            self._write("".join(rows), self._made - self.rows)
         self._flush_at = time.monotonic() + FLUSH_INTERVAL
 
     def _write(self, text: str, rows: int) -> None:
