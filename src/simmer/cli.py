@@ -886,7 +886,7 @@ def plot(folder: RunFolder) -> None:
     from simmer.record.plots import plot_run
 
     try:
-        written = plot_run(folder)
+        written = plot_run(folder, say=lambda line: out.print(line, markup=False))
     except PlotError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
