@@ -282,9 +282,10 @@ SIGINT_MOMENTS = [
 written), or once the program (of that many turns) says it is exiting, as it is stopped."""
 
 
-def _interrupt_recorded_runs(tmp_path: Path) -> None:
+def _interrupt_recorded_runs(tmp_path: Path, moments: list[tuple[str, int]]) -> None:
+    """SIGINT to a recorded run at each of these ``moments``; each recording finished."""
     before = descendants()
-    for number, (moment, count) in enumerate(SIGINT_MOMENTS):
+    for number, (moment, count) in enumerate(moments):
         here = tmp_path / str(number)
         here.mkdir()
         process, folder = _recorded_run(here, count if moment == "its exit" else 1000)
@@ -329,11 +330,11 @@ def test_ctrl_c_at_any_moment_of_a_recorded_program_run_finishes_the_recording(
     windows where Ctrl-C broke a recording are narrow (a trace write, the recording's
     close): 46 such SIGINTs to the old code missed them, and the in-process test above puts
     Ctrl-C in each; this one checks every other moment of a real run."""
-    _interrupt_recorded_runs(tmp_path)
+    _interrupt_recorded_runs(tmp_path, SIGINT_MOMENTS)
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_ctrl_c_finishes_the_recording_beside_a_busy_cpu(tmp_path: Path, busy_cpu: None) -> None:
-    """As above, with another process keeping a CPU busy."""
-    _interrupt_recorded_runs(tmp_path)
+    """As above, with another process keeping a CPU busy, at every other moment."""
+    _interrupt_recorded_runs(tmp_path, SIGINT_MOMENTS[::2])
