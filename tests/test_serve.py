@@ -209,7 +209,10 @@ def test_ctrl_c_landing_in_a_recording_write_leaves_it_whole(
         encoding="utf-8",
     )
     folder = tmp_path / "run"
-    run_program(Simulation.from_config(), f"{sys.executable} {program}", record=folder)
+    try:
+        run_program(Simulation.from_config(), f"{sys.executable} {program}", record=folder)
+    except KeyboardInterrupt:  # not raised out of the test session, which it would end
+        pytest.fail("Ctrl-C came out of the run as KeyboardInterrupt")
     assert landed
     _assert_finished(tmp_path, folder, said="")
 
