@@ -205,7 +205,7 @@ def test_ctrl_c_landing_in_a_recording_write_leaves_it_whole(
         "    for turn in range(20):\n"
         "        robot.drive('w0', 3 if turn % 2 else -3)\n"
         "        robot.send('u0,u1')\n"
-        "        robot.sleep(40)\n",  # 2,400 steps: a flush of 1,024 rows or more
+        "        robot.sleep(40)\n",  # 2,400 steps: rows written during the run
         encoding="utf-8",
     )
     folder = tmp_path / "run"
