@@ -577,9 +577,9 @@ def run(
         from simmer.proctree import adopt_orphans  # (not when embedded: simmer.proctree)
 
         adopt_orphans()
-    log_file = _log_to_file() if program is not None else None
-    if log_file is not None:
-        out.print(f"the simulator's log goes to {log_file}", markup=False)
+    run_log = _RunLog() if program is not None else None
+    if run_log is not None:
+        out.print(f"the simulator's log goes to {run_log.path} (kept if it warns)", markup=False)
     free = {name: 0 for name, value in (("port_rx", port_rx), ("port_tx", port_tx)) if value == 0}
     options = RunOptions.for_config(
         sim.config,
@@ -606,6 +606,8 @@ def run(
     except OSError as exc:
         err.print(_serve_failure(exc, sim.config.settings.host), style="bold red", markup=False)
         raise typer.Exit(1) from None
+    finally:
+        log_file = run_log.finish() if run_log is not None else None
     _say_how_it_went(served, options, log_file)
     raise typer.Exit(served.exit_status)
 
@@ -654,7 +656,8 @@ def _run_simulation(loaded: SimConfig, seed: int | None) -> Simulation:
 
 
 def _say_how_it_went(served: Served, options: RunOptions, log_file: Path | None) -> None:
-    """The outcome, where the recording is, and (with a program) why the run ended."""
+    """The outcome, where the recording is, and (with a program) why the run ended and where
+    the simulator's log is, if it was kept (``log_file``)."""
     out.print(served.outcome.report().summary(), markup=False)
     if served.recording_stopped is not None:
         err.print(served.recording_stopped, style="bold red", markup=False)
@@ -672,7 +675,12 @@ def _say_how_it_went(served: Served, options: RunOptions, log_file: Path | None)
             )
         else:
             ended = "the run was stopped"
-        out.print(f"run ended: {ended}; log: {log_file}", markup=False)
+        log = (
+            "the simulator's log had no warnings and is removed"
+            if log_file is None
+            else f"the simulator's log has warnings: {log_file}"
+        )
+        out.print(f"run ended: {ended}; {log}", markup=False)
 
 
 def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
@@ -747,18 +755,50 @@ def _check_video(path: Path, *, force: bool) -> None:
         raise typer.Exit(1)
 
 
-def _log_to_file() -> Path:
-    """Send the simulator's log to a file, so a program's printout is not mixed with it."""
-    import tempfile
+class _RunLog:
+    """The simulator's log during a ``--program`` run, in a file of its own so that the
+    program's printout is not mixed with it. The file is made by :func:`tempfile.mkstemp`:
+    a name nobody can know beforehand, created only if nothing is there (the old
+    ``simmer-PID.log`` followed a link planted at that name, and one was left per run). It
+    is removed when the run ends unless it holds a warning or an error (:meth:`finish`)."""
 
-    path = Path(tempfile.gettempdir()) / f"simmer-{os.getpid()}.log"
-    handler = logging.FileHandler(path, encoding="utf-8")
-    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
-    root = logging.getLogger()
-    for old in list(root.handlers):
-        root.removeHandler(old)
-    root.addHandler(handler)
-    return path
+    def __init__(self) -> None:
+        import tempfile
+
+        descriptor, name = tempfile.mkstemp(prefix="simmer-", suffix=".log")
+        self.path = Path(name)
+        self.worth_keeping = False
+        """A warning or an error was logged."""
+        self._file = open(descriptor, "w", encoding="utf-8")  # noqa: SIM115 (closed in finish)
+        self._handler = logging.StreamHandler(self._file)
+        self._handler.setFormatter(
+            logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s")
+        )
+        self._handler.addFilter(self._note)
+        root = logging.getLogger()
+        self._previous = list(root.handlers)
+        for old in self._previous:
+            root.removeHandler(old)
+        root.addHandler(self._handler)
+
+    def _note(self, record: logging.LogRecord) -> bool:
+        if record.levelno >= logging.WARNING:
+            self.worth_keeping = True
+        return True
+
+    def finish(self) -> Path | None:
+        """Close the file and give the log back to where it went before; the file if it is
+        kept (it holds a warning or an error), else None (it is removed)."""
+        root = logging.getLogger()
+        root.removeHandler(self._handler)
+        for old in self._previous:
+            root.addHandler(old)
+        self._file.close()
+        if self.worth_keeping:
+            return self.path
+        with contextlib.suppress(OSError):
+            self.path.unlink()
+        return None
 
 
 def _serve_failure(exc: OSError, host: str) -> str:
@@ -912,7 +952,7 @@ def plot(folder: RunFolder) -> None:
     from simmer.record.plots import plot_run
 
     try:
-        written = plot_run(folder)
+        written = plot_run(folder, say=lambda line: out.print(line, markup=False))
     except PlotError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None

@@ -75,24 +75,22 @@ class RunStop(threading.Event):
 
 
 def _stop_on_signals(
-    stop: RunStop,
-    wake: Callable[[], None],
-    received: list[str],
-    running: Callable[[], bool],
+    stop: RunStop, wake: Callable[[], None], received: list[str]
 ) -> Callable[[], None]:
-    """Make :data:`STOP_SIGNALS` stop a run as Esc does: note the signal in ``received``, set
-    ``stop`` and ``wake`` the loop, so the run ends through its usual cleanup (serial link
-    removed, ports closed, recordings finished). That handler raises nothing and takes no
-    lock: an exception raised wherever the main thread happens to be can be swallowed (a
-    signal landing in a finalizer, which Python ignores exceptions from, once left a run
-    that never stopped) or leave a lock held, and a lock the interrupted code holds is
-    never released to it. Ctrl-C (SIGINT), where Python's own handler takes it, raises
-    KeyboardInterrupt as that handler does only while the run goes on (``running()``, no
-    stop signal yet, ``stop`` not set); after that it is only noted in ``received``: a second
-    one (Ctrl-C pressed twice; a sweep's worker gets the terminal's, then the sweep's own)
-    landed in the stopping of the program's process tree and left its detached children
-    running. Returns what puts the previous handlers back. Off the main thread (tests)
-    nothing changes: only the main thread may install handlers."""
+    """Make :data:`STOP_SIGNALS` and Ctrl-C (SIGINT, unless it is ignored or another handler
+    has it) stop a run as Esc does: note the signal in ``received``, set ``stop`` and
+    ``wake`` the loop, so the run ends between two steps through its usual cleanup (serial
+    link removed, ports closed, program stopped, recording finished). The handler raises
+    nothing and takes no lock. An exception raised wherever the main thread happens to be
+    can land inside the simulation's step or a recording's write: Ctrl-C raised
+    KeyboardInterrupt, which landing right after a trace write had those rows written again
+    at the close (trace.csv ran backwards; about once in 48 Ctrl-Cs to recorded runs, with
+    a missing report or a replay that differed). It can also be swallowed (a signal landing
+    in a finalizer, which Python ignores exceptions from, once left a run that never
+    stopped) or leave a lock held, which the interrupted code never releases. Returns what
+    puts the previous handlers back: :func:`serve` does so only once the recording is
+    finished (Ctrl-C landing in its close, the default handler back, left no report). Off
+    the main thread (tests) nothing changes: only the main thread may install handlers."""
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
 
@@ -101,18 +99,12 @@ def _stop_on_signals(
         stop.set_from_signal()
         wake()
 
-    def interrupt(_signum: int, _frame: FrameType | None) -> None:
-        first = running() and not received and not stop.is_set()
-        received.append("SIGINT")  # before raising: the next one finds the run stopping
-        if first:
-            raise KeyboardInterrupt
-
     previous = {}
     for name in STOP_SIGNALS:
         if (number := getattr(signal, name, None)) is not None:
             previous[number] = signal.signal(number, handle)
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not ignored
-        previous[signal.SIGINT] = signal.signal(signal.SIGINT, interrupt)
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, handle)
 
     def restore() -> None:
         for number, handler in previous.items():
@@ -184,78 +176,82 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     signalled: list[str] = []
     recorder: RunRecorder | None = None
     filming: VideoRecorder | None = None
-    restore_signals = _stop_on_signals(
-        stop, runner.bus.wake_from_signal, signalled, running=lambda: not ended
-    )
-    try:
-        transports = Transports(runner.bus, sim.config, options)
-        with transports:
-            if options.record is not None:
-                used = options.replace(link_delay=runner.link_delay if options.lockstep else None)
-                recorder = RunRecorder(sim, options.record, used, outcome, on_stop=_say(echo))
-                echo(f"recording the run into {options.record}")
-            if options.video is not None:
-                from simmer.ui.video import VideoRecorder
+    restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
+    try:  # until the recording is finished, a signal only sets the stop
+        try:
+            transports = Transports(runner.bus, sim.config, options)
+            with transports:
+                if options.record is not None:
+                    used = options.replace(
+                        link_delay=runner.link_delay if options.lockstep else None
+                    )
+                    recorder = RunRecorder(sim, options.record, used, outcome, on_stop=_say(echo))
+                    echo(f"recording the run into {options.record}")
+                if options.video is not None:
+                    from simmer.ui.video import VideoRecorder
 
-                filming = VideoRecorder(sim, options.video, controls=runner)
-                echo(f"recording a video into {options.video}")
-            for line in transports.describe():
-                echo(line)
-            if options.lockstep:
-                echo(
-                    f"lockstep clock: simulated time advances only when the program sleeps, "
-                    f"and {runner.link_delay:g} s per message"
-                )
-                if options.program is not None and not runs_python(options.program):
-                    echo(NOT_PYTHON.format(command=options.program))
-            if options.program is not None:
-                before = descendants()
-                started = _start_program(
-                    options, transports, sim.config, runner.bus, stop, ended, echo
-                )
-                sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.steps, options.program))
-            if options.window:
-                from simmer.ui import run_window
+                    filming = VideoRecorder(sim, options.video, controls=runner)
+                    echo(f"recording a video into {options.video}")
+                for line in transports.describe():
+                    echo(line)
+                if options.lockstep:
+                    echo(
+                        f"lockstep clock: simulated time advances only when the program sleeps, "
+                        f"and {runner.link_delay:g} s per message"
+                    )
+                    if options.program is not None and not runs_python(options.program):
+                        echo(NOT_PYTHON.format(command=options.program))
+                if options.program is not None:
+                    before = descendants()
+                    started = _start_program(
+                        options, transports, sim.config, runner.bus, stop, ended, echo
+                    )
+                    sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.steps, options.program))
+                if options.window:
+                    from simmer.ui import run_window
 
-                run_window(runner, until=options.seconds, stop=stop, echo=echo)
-            else:
-                pace = (
-                    "as fast as possible"
-                    if options.speed is None
-                    else f"{options.speed:g}x real time"
-                )
-                echo(f"running headless, {pace}; Ctrl-C to stop")
-                runner.run(stop_event=stop, until=options.seconds)
-            if signalled:
-                echo(f"stopped ({signalled[0]})")
-                ended.insert(0, "quit")
-            elif not ended:
-                limit = options.seconds is not None and sim.time >= options.seconds - 1e-9
-                ended.append("seconds" if limit else "quit")
-    except KeyboardInterrupt:
-        echo("stopped")
-        ended.append("quit")
-    except BaseException:
-        ended.append("error")  # stopping: a Ctrl-C in the cleanup is only noted, not raised
-        if recorder is not None:  # keep what was recorded, with a report
-            recorder.close("error")
-        raise
+                    run_window(runner, until=options.seconds, stop=stop, echo=echo)
+                else:
+                    pace = (
+                        "as fast as possible"
+                        if options.speed is None
+                        else f"{options.speed:g}x real time"
+                    )
+                    echo(f"running headless, {pace}; Ctrl-C to stop")
+                    runner.run(stop_event=stop, until=options.seconds)
+                if signalled:
+                    echo(f"stopped ({signalled[0]})")
+                    ended.insert(0, "quit")
+                elif not ended:
+                    limit = options.seconds is not None and sim.time >= options.seconds - 1e-9
+                    ended.append("seconds" if limit else "quit")
+        except KeyboardInterrupt:
+            echo("stopped")
+            ended.append("quit")
+        except BaseException:
+            ended.append("error")
+            if recorder is not None:  # keep what was recorded, with a report
+                recorder.close("error")
+            raise
+        finally:
+            runner.bus.close()
+            if started is not None:
+                started.stop()
+            if before is not None:
+                stop_strays(before)
+            if filming is not None:
+                _finish_video(filming, echo)
+        status = (
+            started.process.returncode if started is not None and ended[0] == "program" else None
+        )
+        if status is not None:  # here, in the thread that owns the simulation
+            sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.steps))
+        served = Served(runner, outcome, ended[0], status, program_started=started is not None)
+        if recorder is not None:
+            recorder.close(served.ended_by, status)
+            served.recording_stopped = recorder.stopped
     finally:
-        runner.bus.close()
-        if started is not None:
-            started.stop()
-        if before is not None:
-            stop_strays(before)
-        if filming is not None:
-            _finish_video(filming, echo)
         restore_signals()
-    status = started.process.returncode if started is not None and ended[0] == "program" else None
-    if status is not None:  # here, in the thread that owns the simulation
-        sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.steps))
-    served = Served(runner, outcome, ended[0], status, program_started=started is not None)
-    if recorder is not None:
-        recorder.close(served.ended_by, status)
-        served.recording_stopped = recorder.stopped
     return served
 
 

@@ -7,8 +7,10 @@ import re
 import socket
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from link_support import free_port
@@ -126,3 +128,40 @@ def test_cli_refuses_a_serial_link_path_that_exists(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "already there" in result.stderr
     assert os.readlink(path) == "/dev/null"
+
+
+@pytest.mark.parametrize("warns", [False, True])
+def test_a_program_run_log_follows_no_planted_link_and_is_kept_only_if_it_warns(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, warns: bool
+) -> None:
+    """The simulator's log of a ``--program`` run was ``simmer-PID.log`` in the temp folder: a
+    link planted at that name was followed (overwriting what it pointed at), and one file was
+    left per run. It is now a new file of an unknown name, removed at the end of the run
+    unless it holds a warning, and then the last line says where it is."""
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    victim = tmp_path / "victim.txt"
+    victim.write_text("not the simulator's", encoding="utf-8")
+    planted = temp / f"simmer-{os.getpid()}.log"
+    planted.symlink_to(victim)
+    program = tmp_path / "program.py"
+    message = "zz9" if warns else "u0"  # an unknown command is logged as a warning
+    program.write_text(
+        f"from simmer.client import connect\nconnect().send({message!r})\n", encoding="utf-8"
+    )
+    result = CliRunner().invoke(
+        app, ["run", "--headless", *PORTS, "--program", f"{sys.executable} {program}"]
+    )
+    assert result.exit_code == 0, result.output
+    assert victim.read_text(encoding="utf-8") == "not the simulator's"
+    left = sorted(path for path in temp.iterdir() if path != planted)
+    last = result.output.strip().splitlines()[-1]
+    if warns:
+        assert len(left) == 1
+        assert not left[0].is_symlink()
+        assert last.endswith(f"the simulator's log has warnings: {left[0]}")
+        assert "zz9" in left[0].read_text(encoding="utf-8")
+    else:
+        assert left == []
+        assert last.endswith("the simulator's log had no warnings and is removed")

@@ -474,7 +474,8 @@ def test_a_run_cut_short_is_replayed_as_far_as_it_goes(copy: Path) -> None:
     check = recording.check
     assert check.matches
     assert check.incomplete is not None
-    assert check.incomplete.startswith("incomplete recording: no report.json, events.jsonl ends")
+    assert check.incomplete.startswith("the run was cut short at ")
+    assert f"trace to {float(kept[-1].split(',')[0]):.2f} s" in check.incomplete
     assert check.lines()[-1] == check.incomplete
     assert recording.commands[-1].event.message == "w0-36"
     # Replayed past the last event, to the trace's last whole row (the drive went on).
@@ -483,7 +484,7 @@ def test_a_run_cut_short_is_replayed_as_far_as_it_goes(copy: Path) -> None:
     assert recording.frames[-1].time == pytest.approx(last, abs=1 / FPS)
     result = CliRunner().invoke(app, ["replay", "--check", str(copy)])
     assert result.exit_code == 0
-    assert "incomplete recording" in result.stderr
+    assert "the run was cut short" in result.stderr
 
 
 def test_replay_without_a_screen_says_what_to_do_instead(run_folder: Path) -> None:

@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import csv
 import json
+import logging
 import math
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -56,6 +57,8 @@ from simmer.world.localization import (
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+log = logging.getLogger("simmer.plot")
 
 TRACE_FILE = "trace.csv"
 EVENTS_FILE = "events.jsonl"
@@ -283,7 +286,8 @@ def _read_trace(path: Path) -> Trace:
         if all(abs(v) <= MAX_POSE_VALUE for v in pose):  # False for NaN too
             values.append((pose, row))
     if not values:
-        raise PlotError(f"{path} has no rows of data: the run recorded nothing")
+        said = cut_short_of(path.parent, None) or "the run recorded nothing"
+        raise PlotError(f"{path} has no rows of data: {said}")
     poses = np.array([pose for pose, _ in values], dtype=np.float64)
     sensors = {}
     for name in candidates:
@@ -416,6 +420,33 @@ def _read_events(path: Path, run: RecordedRun) -> None:
                 run.estimates.append(Estimate(time, part, *errors(pose, truth)))
 
 
+def cut_short_of(folder: Path, trace: Trace | None) -> str | None:
+    """What a run folder without a report (its run was killed) says about where it ends,
+    its events and its ``trace`` compared (:func:`~simmer.record.tracecheck.cut_short`); None
+    if it has a report, or no events."""
+    from simmer.record.runfolder import REPORT_JSON
+    from simmer.record.tracecheck import cut_short
+
+    events = folder / EVENTS_FILE
+    if (folder / REPORT_JSON).is_file() or not events.is_file():
+        return None
+    starts, times = [0.0], []  # when each part (reset) starts; each event's run time
+    for _, event in _json_lines(events):
+        time = _float(event.get(EV_TIME))
+        if math.isfinite(time):
+            times.append(starts[-1] + time)
+            if event.get(EV_TYPE) == EV_RESET:
+                starts.append(times[-1])
+    if not times:
+        return None
+    if trace is None or not len(trace.time):
+        return f"{cut_short(max(times), None, len(times))}; simmer replay --check replays them"
+    part = int(trace.part[-1])
+    end = (starts[part] if part < len(starts) else 0.0) + float(trace.time[-1])
+    untraced = sum(time > end + 1e-9 for time in times)
+    return f"{cut_short(max(times), end, untraced)}; the plots go to {end:.2f} s"
+
+
 def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
     """The JSON objects of a JSON-lines file with their line numbers, skipping lines that are
     not one."""
@@ -464,13 +495,17 @@ def _position(value: Any) -> tuple[float, float] | None:
 # ----------------------------------------------------------------------------- plotting
 
 
-def plot_run(folder: str | Path) -> list[Path]:
+def plot_run(folder: str | Path, say: Callable[[str], None] = log.warning) -> list[Path]:
     """Write ``path.png`` and ``sensors.png`` into a run folder and show them in its
     ``report.md``: written again from ``report.json`` for a recorded run, else linked from a
-    ``report.md`` of some other origin if it does not show them yet; return the files written."""
+    ``report.md`` of some other origin if it does not show them yet; return the files written.
+    A run cut short (killed: no report) is drawn as far as its trace goes, and ``say`` is
+    told where its events and trace end (:func:`cut_short_of`)."""
     from simmer.record.runfolder import REPORT_JSON, write_report_md
 
     run = read_run(folder)
+    if (said := cut_short_of(run.folder, run.trace)) is not None:
+        say(said)
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
     write_path_plot(run, path)
     write_sensor_plot(run, sensors)

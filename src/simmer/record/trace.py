@@ -15,11 +15,13 @@ two rows at the lab's speeds. A row is written at the first step of every 1/30 s
 time (every second step at 60 steps a second; every step below 30), plus the start and the
 last step. The time restarts at 0 after a reset (the robot is back at its start).
 
-Rows are written once a wall-clock second, or every 1,024 rows (a write per row would cost
-more than making it), so after ``kill -9`` its last second may be missing; ``events.jsonl`` has
-every event, and a replay (:func:`simmer.record.retrace`) writes the trace again. The file takes
-its bytes from the recording's budget (:class:`~simmer.record.eventlog.RecordingBudget`); a
-write that does not fit, or fails (a full disk), stops the trace at its last whole row, and
+Rows are written once a simulated second (:data:`HELD_SECONDS`) or a wall-clock second,
+whichever comes first (a write per row would cost more than making it), so after ``kill -9``
+at most its last simulated second is missing (rows were written every 1,024 rows: a fast run
+killed had 33 s of events and no rows); ``events.jsonl`` has every event, and a replay
+(:func:`simmer.record.retrace`) writes the trace again. The file takes its bytes from the
+recording's budget (:class:`~simmer.record.eventlog.RecordingBudget`); a write that does not
+fit, or fails (a full disk), stops the trace at its last whole row, and
 :attr:`TraceWriter.rows` counts only rows in the file.
 """
 
@@ -47,8 +49,8 @@ NUMBER = "%.10g"
 """How a number is written (``nan`` and ``inf`` as themselves)."""
 ROW = f"{NUMBER},%d,{NUMBER},{NUMBER},{NUMBER},%d"
 """A row up to its sensors' columns."""
-PENDING_ROWS = 1024
-"""Rows held before they are written, at most (a fast headless run makes thousands a second)."""
+HELD_SECONDS = 1.0
+"""Simulated seconds of rows held before they are written, at most: what ``kill -9`` loses."""
 MAX_MESSAGES = 1024
 """Distinct messages whose sensor columns are remembered (a program repeats a few)."""
 
@@ -87,12 +89,15 @@ class TraceWriter:
         self._readings: list[float | None] = [None] * len(sensors)
         self._rows: list[str] = []
         """Rows (each in two pieces) made since the last flush: written together, once a
-        wall-clock second (a write per row costs more than making it)."""
+        simulated or a wall-clock second (a write per row costs more than making it)."""
         self._readings_text = "," * len(sensors) + "\n"
         """The end of a row: the readings, written again only when one changes."""
         self._changed = False
         self._columns_of: dict[str, tuple[tuple[int, int], ...]] = {}
         self._rows_per_step = min(1.0, TRACE_RATE / frame_rate)
+        self._held_pieces = 2 * max(1, math.floor(min(TRACE_RATE, frame_rate) * HELD_SECONDS))
+        """Pieces of :attr:`_rows` (two a row) that make :data:`HELD_SECONDS`: then they are
+        written."""
         self._next_row = 0
         """The step that writes the next row."""
         self._collisions = 0
@@ -156,14 +161,15 @@ class TraceWriter:
         tick = math.floor(step * self._rows_per_step + 1e-6)
         self._next_row = math.ceil((tick + 1 - 1e-6) / self._rows_per_step)
         self._made += 1
-        if len(self._rows) >= PENDING_ROWS * 2 or time.monotonic() >= self._flush_at:
+        if len(self._rows) >= self._held_pieces or time.monotonic() >= self._flush_at:
             self._flush()
 
     def _flush(self) -> None:
-        """Write the rows made since the last flush, in one write."""
-        if self._rows:
-            self._write("".join(self._rows), self._made - self.rows)
-            self._rows.clear()
+        """Write the rows made since the last flush, in one write; they are let go of before
+        it, so that a flush cut short (by an exception) cannot write them a second time."""
+        rows, self._rows = self._rows, []
+        if rows:
+            self._write("".join(rows), self._made - self.rows)
         self._flush_at = time.monotonic() + FLUSH_INTERVAL
 
     def _write(self, text: str, rows: int) -> None:

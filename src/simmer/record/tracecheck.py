@@ -59,6 +59,12 @@ class TraceRows:
         """Where the last row was written (None: no rows)."""
         return self.rows[-1][0] if self.rows else None
 
+    @property
+    def end_time(self) -> float:
+        """The time of the last row, counted from the last reset before it (NaN: no rows, or
+        not a number)."""
+        return _time(self.rows[-1][1], self.header) if self.rows else math.nan
+
 
 def read_trace_rows(path: str | Path) -> TraceRows:
     """The rows of a ``trace.csv`` (OSError if it cannot be read; ValueError if it has no
@@ -129,3 +135,18 @@ def first_difference(
         if key not in replayed_keys:
             return TraceDifference(_time(row, header), key[0], "row", f"step {key[1]}", NO_ROW)
     return None
+
+
+def cut_short(events_end: float | None, trace_end: float | None, untraced: int) -> str:
+    """What a run folder without ``report.json`` (its run was killed, crashed, or lost power:
+    the recorder writes the report however else the run ends) says about where it ends:
+    ``events_end`` and ``trace_end`` in seconds from the run's start (None: no events, no
+    trace rows), ``untraced`` the events after the trace's last row. The trace is written a
+    simulated second at a time (:mod:`simmer.record.trace`), every event as it comes, so the
+    events can go further: said, so that "matches" or a short plot is not read as the run."""
+    ends = [end for end in (events_end, trace_end) if end is not None]
+    at = f" at {max(ends):.2f} s" if ends else " at its start"
+    events = "no events" if events_end is None else f"events to {events_end:.2f} s"
+    trace = "no trace rows" if trace_end is None else f"trace to {trace_end:.2f} s"
+    have = "event has" if untraced == 1 else "events have"
+    return f"the run was cut short{at} ({events}, {trace}): {untraced:,} {have} no trace rows"

@@ -49,7 +49,13 @@ from simmer.record.runfolder import (
     sensor_ids,
 )
 from simmer.record.trace import TraceWriter
-from simmer.record.tracecheck import TraceDifference, TraceRows, first_difference, read_trace_rows
+from simmer.record.tracecheck import (
+    TraceDifference,
+    TraceRows,
+    cut_short,
+    first_difference,
+    read_trace_rows,
+)
 from simmer.view.frames import FPS, FrameClock
 from simmer.view.maker import LocalControls, SnapshotMaker
 from simmer.view.snapshot import RobotLayout, Snapshot, StaticScene
@@ -261,6 +267,8 @@ class Check:
             return f"DIFFERS from the recording: {self.reply_differences[0]}"
         if self.no_trace:
             return f"cannot be compared: the folder has no {TRACE}"
+        if self.incomplete is not None:
+            return f"matches the recording as far as it goes ({self.rows} trace rows, every reply)"
         return f"matches the recording ({self.rows} trace rows, every reply)"
 
     def lines(self) -> list[str]:
@@ -375,7 +383,7 @@ class Recording:
         except ValueError as exc:  # each names its file
             raise ReplayError(str(exc)) from None
         recorded = _read_recorded_trace(folder)
-        incomplete = _incomplete(folder, events)
+        incomplete = _incomplete(folder, events, recorded)
         until = _replay_until(events, recorded) if incomplete else None
         max_steps = int(max_seconds * config.settings.frame_rate)
         if until is not None and until > max_steps:
@@ -487,21 +495,35 @@ def _read_recorded_trace(folder: Path) -> TraceRows | None:
         raise ReplayError(f"cannot read {path}: {exc}") from None
 
 
-def _incomplete(folder: Path, events: list[Event]) -> str | None:
+def _incomplete(folder: Path, events: list[Event], recorded: TraceRows | None) -> str | None:
     """Why the recording is incomplete (None: it is complete): the recorder writes
     report.json when the run ends, however it ends, unless it is killed; it says there
-    whether the recording stopped before the run did (a full disk)."""
+    whether the recording stopped before the run did (a full disk). A run killed is cut
+    short where its events and trace end (:func:`~simmer.record.tracecheck.cut_short`)."""
     if (folder / REPORT_JSON).is_file():
         try:
             stopped = read_json(folder / REPORT_JSON).get("recording_stopped")
         except (OSError, ValueError) as exc:
             raise ReplayError(str(exc)) from None
         return None if stopped is None else f"incomplete recording: {stopped}"
-    end = f"{events[-1].time:.2f} s" if events else "its start"
-    return (
-        f"incomplete recording: no {REPORT_JSON}, {EVENTS} ends at {end} "
-        "(the run was killed or crashed, or the disk filled)"
-    )
+    starts = [0.0]  # seconds from the run's start at which each part (reset) begins
+    for event in events:
+        if isinstance(event, ResetEvent):
+            starts.append(starts[-1] + event.time)
+    end = recorded.end if recorded is not None else None
+    trace_end = None
+    if recorded is not None and end is not None and end[0] < len(starts):
+        time = recorded.end_time
+        trace_end = starts[end[0]] + time if math.isfinite(time) else None
+    part, untraced = 0, 0
+    for event in events:
+        untraced += end is None or (part, event.step) > end
+        part += isinstance(event, ResetEvent)
+    events_end = starts[part] + events[-1].time if events else None
+    said = cut_short(events_end, trace_end, untraced)
+    if trace_end is None:
+        return f"{said}; no {REPORT_JSON}: every reply is compared, the trace is not"
+    return f"{said}; no {REPORT_JSON}: the trace is compared up to {trace_end:.2f} s"
 
 
 def _replay_until(events: list[Event], recorded: TraceRows | None) -> int | None:
