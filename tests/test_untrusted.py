@@ -58,7 +58,8 @@ def test_a_character_the_font_lacks_is_replaced_only_where_it_is_drawn() -> None
     assert drawable("中") == "中"  # a font that has it may draw it
 
 
-@settings(max_examples=300, deadline=None)
+@pytest.mark.slow
+@settings(max_examples=200, deadline=None)
 @given(ANY_TEXT)
 def test_any_text_is_drawn_by_pygame_and_bounded(text: str) -> None:
     shown = drawable(text, has_glyph)
@@ -68,7 +69,8 @@ def test_any_text_is_drawn_by_pygame_and_bounded(text: str) -> None:
     assert isinstance(surface, pygame.Surface)
 
 
-@settings(max_examples=40, deadline=None)
+@pytest.mark.slow
+@settings(max_examples=25, deadline=None)
 @given(ANY_TEXT)
 def test_any_text_is_drawn_by_matplotlib_without_a_warning(text: str) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -112,7 +114,8 @@ JSON_VALUES = st.recursive(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@pytest.mark.slow
+@settings(max_examples=100, deadline=None)
 @given(JSON_VALUES, st.integers(0, 6))
 def test_the_depth_is_counted_as_the_parser_nests(value: Any, limit: int) -> None:
     text = json.dumps(value, ensure_ascii=False)

@@ -44,13 +44,11 @@ MAX_JSON_CHARS = 16 * 1024 * 1024
 """Characters of one JSON text, unless the reader asks for fewer: a run folder's manifest and
 the maze's document frame are bounded by 16 MB too."""
 
-_STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
+_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
 """A JSON string, escapes included (brackets in it are text, not nesting)."""
-_PARENTHESES = str.maketrans(
-    "[]{}", "()()", "".join(chr(c) for c in range(128) if chr(c) not in "[]{}")
-)
-"""Brackets as ``(`` and ``)``, every other ASCII character deleted."""
-_PARENTHESIS = re.compile(r"[()]")
+_PARENTHESES = bytes.maketrans(b"[]{}", b"()()")
+_NOT_BRACKETS = bytes(c for c in range(256) if c not in b"[]{}")
+"""Every byte but the brackets: no byte of a UTF-8 character beyond ASCII is one."""
 
 
 def drawable(text: str, known: Callable[[str], bool] | None = None) -> str:
@@ -70,18 +68,19 @@ def drawable(text: str, known: Callable[[str], bool] | None = None) -> str:
     )
 
 
-def nests_deeper(text: str, limit: int = MAX_JSON_DEPTH) -> bool:
+def nests_deeper(text: str | bytes, limit: int = MAX_JSON_DEPTH) -> bool:
     """Whether the arrays and objects of JSON ``text`` nest more than ``limit`` deep, counted
     without recursion: brackets inside strings are text, and the deepest point of the running
     count of brackets opened less those closed is the depth (a bracket never closed counts,
-    since the parser recurses into it before it finds the end)."""
+    since the parser recurses into it before it finds the end). About 70 us for a 50 KB show
+    message of 2,000 particles, where :func:`json.loads` takes 2 ms."""
     import numpy as np  # here: importing simmer.client loads no numpy (tests/test_client.py)
 
-    outside = _STRING.sub("", text) if '"' in text else text
-    nesting = outside.translate(_PARENTHESES)
-    if not nesting.isascii():  # not JSON, but json.loads may recurse before it sees so
-        nesting = "".join(_PARENTHESIS.findall(nesting))
-    steps = 81 - 2 * np.frombuffer(nesting.encode("ascii"), dtype=np.int8)  # "(" 40, ")" 41
+    data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
+    if b'"' in data:
+        data = _STRING.sub(b"", data)
+    nesting = data.translate(_PARENTHESES, _NOT_BRACKETS)
+    steps = 81 - 2 * np.frombuffer(nesting, dtype=np.int8)  # "(" is 40, ")" 41
     return bool(np.cumsum(steps, dtype=np.int32).max(initial=0) > limit)
 
 
@@ -95,16 +94,16 @@ def parse_json(
         raise ValueError(
             f"{what} is {len(text):,} characters, over the limit of {max_chars:,} ({limit})"
         )
-    if isinstance(text, bytes):
-        try:
-            text = text.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise ValueError(f"{what} is not readable JSON: {exc}") from None
     if nests_deeper(text):
         raise ValueError(
             f"{what} is not readable JSON: it nests lists or objects more than "
             f"{MAX_JSON_DEPTH} deep (MAX_JSON_DEPTH)"
         )
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{what} is not readable JSON: {exc}") from None
     try:
         return json.loads(text)
     except ValueError as exc:  # json.JSONDecodeError is a ValueError
