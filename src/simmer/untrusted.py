@@ -38,7 +38,7 @@ and the BOM U+FEFF), surrogates, private-use and unassigned code points, line an
 separators."""
 
 MAX_JSON_DEPTH = 32
-"""Arrays and objects nested in one JSON text. SimMeR's own nest at most 8 (a manifest's
+"""Arrays and objects nested in one JSON text. SimMeR's own nest at most 6 (a manifest's
 configuration); Python's json module recurses once a level and fails near 1,000."""
 MAX_JSON_CHARS = 16 * 1024 * 1024
 """Characters of one JSON text, unless the reader asks for fewer: a run folder's manifest and
