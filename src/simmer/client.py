@@ -43,6 +43,7 @@ from simmer.protocol import (
     read_framed_reply,
     unpack_replies,
 )
+from simmer.untrusted import parse_json
 
 Scheme = Literal["stream", "two-port", "serial"]
 log = logging.getLogger("simmer.client")
@@ -360,7 +361,9 @@ class Client:
         _, text = self._ask(META_PREFIX.decode() + "maze")
         if text is None:
             raise ConnectionFailed("the simulator answered '%maze' with values, not the maze")
-        data: dict[str, Any] = json.loads(text)
+        data: dict[str, Any] = parse_json(
+            text, "the maze", MAX_DOCUMENT_BYTES, "MAX_DOCUMENT_BYTES"
+        )
         return data
 
     def show(

@@ -130,7 +130,7 @@ def test_a_flood_of_shows_keeps_the_bound_per_simulated_second_and_counts_the_re
 
 def test_a_belief_that_is_not_one_is_one_line() -> None:
     for text, words in [
-        ("{bad", "a belief is JSON"),
+        ("{bad", "a belief is not readable JSON"),
         ("[1, 2]", "a belief is a JSON object"),
         ('{"particles": [[1, 2]]}', "rows of 4 numbers"),
         ('{"pose": [1, "x", 3]}', "pose must be 3 finite numbers"),

@@ -6,6 +6,8 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -218,3 +220,25 @@ def test_unreadable_folders_raise_plot_errors(tmp_path: Path) -> None:
     (folder / "trace.csv").write_text("time,x,y,heading\n", encoding="utf-8")
     with pytest.raises(PlotError, match="no rows"):
         read_run(folder)
+
+
+def test_hostile_names_in_a_run_folder_are_drawn_as_text(tmp_path: Path) -> None:
+    """A folder's name (not UTF-8 on disk: a lone surrogate in Python), the configuration's
+    name and the sensors' names are drawn in the titles and legends; a lone surrogate stopped
+    matplotlib and a ``$`` pair was parsed as mathematics (``\\foo``: a traceback)."""
+    folder = tmp_path / os.fsdecode(b"run\xff")
+    write_run(folder, lab_path())
+    manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    manifest["config"]["source"] = "/labs/\ud800 $\\foo$ \u202e\x00.toml"
+    (folder / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    trace = (folder / "trace.csv").read_text(encoding="utf-8")
+    header, rest = trace.split("\n", 1)
+    hostile = header.replace("u1", "u1$\\foo$").replace("u2", "u2\u202e\ufeff\u200b")
+    (folder / "trace.csv").write_text(f"{hostile}\n{rest}", encoding="utf-8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # "Glyph missing from font" is a warning
+        written = plot_run(folder)
+    assert written == [folder / "path.png", folder / "sensors.png"]
+    for path in written:
+        with Image.open(path) as image:
+            assert image.format == "PNG"

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from simmer.untrusted import parse_json
 from simmer.world.events import BeliefEvent, Event, ResetEvent
 
 MAX_PARTICLES = 2000
@@ -194,13 +195,7 @@ def read_belief(data: Any) -> tuple[Belief, int]:
 
 def parse_belief(text: str) -> tuple[Belief, int]:
     """:func:`read_belief` of JSON text (ValueError, one line, if it is not a belief)."""
-    if len(text) > MAX_BELIEF_BYTES:
-        raise ValueError(f"a belief of {len(text)} characters is over {MAX_BELIEF_BYTES}")
-    try:
-        data = json.loads(text)
-    except ValueError as exc:
-        raise ValueError(f"a belief is JSON: {exc}") from None
-    return read_belief(data)
+    return read_belief(parse_json(text, "a belief", MAX_BELIEF_BYTES, "MAX_BELIEF_BYTES"))
 
 
 class BeliefBoard:

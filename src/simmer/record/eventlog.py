@@ -31,6 +31,7 @@ from typing import Any, get_type_hints
 
 from simmer.geometry import Pose
 from simmer.options import MAX_RECORDING_BYTES
+from simmer.untrusted import parse_json
 from simmer.world.events import (
     BeliefEvent,
     CollisionEndEvent,
@@ -236,10 +237,10 @@ def read_events(path: str | Path, max_steps: int | None = None) -> list[Event]:
     with path.open(encoding="utf-8", errors="strict") as file:
         for number, line in enumerate(file, 1):
             try:
-                event = event_from_dict(_object(json.loads(line)))
+                event = event_from_dict(_object(parse_json(line, "the line")))
                 if event.step < 0:
                     raise ValueError(f"step {event.step} is negative")
-            except (ValueError, RecursionError) as exc:  # json.JSONDecodeError is a ValueError
+            except ValueError as exc:
                 if not line.endswith("\n"):
                     break
                 raise ValueError(f"{path} line {number}: {exc}") from None

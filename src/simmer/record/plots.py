@@ -29,12 +29,12 @@ Matplotlib (Agg backend, no pyplot) is imported only when a plot is drawn.
 from __future__ import annotations
 
 import csv
-import json
 import logging
 import math
 import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -46,6 +46,7 @@ from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.errors import PlotError
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.untrusted import drawable, parse_json
 from simmer.world.localization import (
     HEADING_TOLERANCE,
     MAX_ERRORS,
@@ -454,8 +455,8 @@ def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
         with path.open(encoding="utf-8", errors="replace") as file:
             for number, line in enumerate(file, 1):
                 try:
-                    value = json.loads(line)
-                except (ValueError, RecursionError):
+                    value = parse_json(line, "an event")
+                except ValueError:
                     continue
                 if isinstance(value, dict):
                     yield number, value
@@ -607,8 +608,33 @@ def _save(fig: Figure, target: Path) -> None:
     """Write a figure as PNG with the Agg canvas (no pyplot, no window)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+    drawable_texts(fig)
     FigureCanvasAgg(fig)
     fig.savefig(target, dpi=fig.dpi, format="png")
+
+
+def drawable_texts(fig: Figure) -> None:
+    """Pass every text of ``fig`` through :func:`~simmer.untrusted.drawable` and take it
+    literally: titles, labels and legends hold a run folder's names and a program's text, and
+    a lone surrogate stopped matplotlib drawing, as did a ``$`` pair read as mathematics."""
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):
+        text.set_text(drawable(text.get_text(), _has_glyph))
+        text.set_parse_math(False)
+
+
+@cache
+def _glyphs() -> frozenset[int]:
+    """The characters matplotlib's default font has glyphs for (as code points)."""
+    from matplotlib.font_manager import FontProperties, findfont, get_font
+
+    return frozenset(get_font(findfont(FontProperties())).get_charmap())
+
+
+def _has_glyph(char: str) -> bool:
+    """Whether matplotlib's default font draws ``char`` (else it warns and draws a box)."""
+    return ord(char) in _glyphs()
 
 
 def _rgb(color: Sequence[int]) -> tuple[float, float, float]:

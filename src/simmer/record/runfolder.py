@@ -48,6 +48,7 @@ from simmer.record.eventlog import (
     stop_reason,
 )
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
+from simmer.untrusted import parse_json
 from simmer.world.events import Event
 from simmer.world.outcome import Outcome
 from simmer.world.replay import Replayed, replay
@@ -250,10 +251,7 @@ def read_json(path: Path) -> dict[str, Any]:
             f"{path} is larger than {MAX_JSON_BYTES:,} bytes, more than SimMeR writes: "
             "not a run's file"
         )
-    try:
-        data = json.loads(text.decode("utf-8"))
-    except (UnicodeError, RecursionError, ValueError) as exc:
-        raise ValueError(f"{path} is not readable JSON: {exc}") from None
+    data = parse_json(text, str(path), MAX_JSON_BYTES, "MAX_JSON_BYTES")
     if not isinstance(data, dict):
         raise ValueError(f"{path} holds {type(data).__name__}, not a JSON object")
     return data

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from simmer.record.plots import drawable_texts
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
 
@@ -168,6 +169,7 @@ def _start_cells_figure(
 def _save(fig: Figure, target: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+    drawable_texts(fig)
     FigureCanvasAgg(fig)
     fig.savefig(target, format="png", dpi=100)
 

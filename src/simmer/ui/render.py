@@ -9,11 +9,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cache, lru_cache
 from typing import Protocol
 
 import pygame
+import pygame.freetype
 
 from simmer.colors import Color, Point, Rect
+from simmer.untrusted import drawable
 
 
 class Renderer(Protocol):
@@ -99,8 +102,25 @@ class RecordingRenderer:
         self.calls.append(DrawCall("text", (text, pos, color, size, centered)))
 
 
+@cache
+def _default_face() -> pygame.freetype.Font:
+    """pygame's default font (the one :class:`TextCache` draws with), to ask about glyphs."""
+    if not pygame.freetype.get_init():
+        pygame.freetype.init()
+    return pygame.freetype.Font(None, size=12)
+
+
+@lru_cache(maxsize=4096)
+def has_glyph(char: str) -> bool:
+    """Whether pygame's default font has a glyph for ``char`` (else it draws an empty box)."""
+    return _default_face().get_metrics(char)[0] is not None
+
+
 class TextCache:
-    """Rendered text surfaces by (text, colour, size): a HUD line is rasterised once per change."""
+    """Rendered text surfaces by (text, colour, size): a HUD line is rasterised once per change.
+
+    Every string drawn in a window, a video or a replay is rendered here, so here it passes
+    :func:`~simmer.untrusted.drawable` (a program's belief label may hold anything)."""
 
     LIMIT = 512
 
@@ -124,7 +144,8 @@ class TextCache:
         if surface is None:
             if len(self._surfaces) >= self.LIMIT:
                 self._surfaces.clear()
-            surface = self._surfaces[key] = self.font(size).render(text, True, color)
+            shown = drawable(text, has_glyph)
+            surface = self._surfaces[key] = self.font(size).render(shown, True, color)
         return surface
 
 

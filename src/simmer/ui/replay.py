@@ -25,6 +25,7 @@ from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.render import PygameRenderer, Renderer, TextCache
 from simmer.ui.scene import PANEL_HEIGHT, base_scene_size, default_window_size, tint
 from simmer.ui.window import HIDDEN_DRIVERS, new_file, save_screenshot
+from simmer.untrusted import drawable
 from simmer.view.replay_model import Playhead, Recording, ReplayCommand
 from simmer.view.snapshot import HasScene
 
@@ -228,7 +229,7 @@ class ReplayWindow:
         pygame.display.init()  # the event queue, even when drawing on a given surface
         self._own_display = surface is None
         if surface is None:
-            pygame.display.set_caption(f"SimMeR replay - {recording.folder}")
+            pygame.display.set_caption(drawable(f"SimMeR replay - {recording.folder}"))
             surface = pygame.display.set_mode(
                 size or replay_window_size(recording.scene), pygame.RESIZABLE
             )

@@ -48,6 +48,7 @@ from simmer.ui.bridge import (
 )
 from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.scene import ScenePainter, View, default_window_size
+from simmer.untrusted import drawable
 from simmer.view.snapshot import Snapshot
 from simmer.world import Simulation
 
@@ -119,7 +120,7 @@ class Window:
         pygame.display.init()  # the event queue, even when drawing on a given surface
         self._own_display = surface is None
         if surface is None:
-            pygame.display.set_caption(f"SimMeR - {self.scene.config.source}")
+            pygame.display.set_caption(drawable(f"SimMeR - {self.scene.config.source}"))
             surface = pygame.display.set_mode(
                 size or default_window_size(self.scene), pygame.RESIZABLE
             )
