@@ -36,8 +36,9 @@ from types import TracebackType
 from typing import Any, NamedTuple
 
 import simmer
-from simmer.config.models import SimConfig
-from simmer.config.validate import config_from_dict
+from simmer.config.models import DEVICE_GROUPS, SimConfig
+from simmer.config.validate import DEFAULT_KIND, config_from_dict
+from simmer.devices.registry import BUILTIN_KINDS
 from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
@@ -164,30 +165,96 @@ def recorded_plugins(data: dict[str, Any]) -> list[str]:
     return list(plugins)
 
 
+CODE_KINDS = frozenset({"simmer_device"})
+"""Built-in device kinds that import a file their configuration names (the original SimMeR's
+device classes, :mod:`simmer.compat.template`): in a run folder that file is code, as a plug-in
+is, and is imported only with ``trust``."""
+MAX_CODE_NAMED = 3
+"""Pieces of code an :class:`~simmer.errors.UntrustedRun` names (then how many more), so that a
+manifest listing thousands of devices still gets one line."""
+MAX_NAME_CHARS = 60
+"""Characters of a name read from a run folder that a message shows."""
+
+
+def shown_name(text: str) -> str:
+    """A name read from a run folder, for a one-line message: as it is if printable and short,
+    else its first :data:`MAX_NAME_CHARS` characters quoted with escapes (no newline, no
+    control or bidirectional character reaches the terminal)."""
+    if text.isprintable() and len(text) <= MAX_NAME_CHARS:
+        return text
+    return repr(text[:MAX_NAME_CHARS]) + ("..." if len(text) > MAX_NAME_CHARS else "")
+
+
+def _device_tables(devices: list[Any]) -> dict[str, dict[str, Any]]:
+    """A manifest's ``config.devices`` as the configuration's device tables, by group (ValueError
+    for an entry that is not a recorded device)."""
+    tables: dict[str, dict[str, Any]] = {group: {} for group in DEVICE_GROUPS}
+    for device in devices:
+        if not (
+            isinstance(device, dict)
+            and device.get("group") in DEVICE_GROUPS
+            and isinstance(device.get("id"), str)
+            and isinstance(device.get("params"), dict)
+        ):
+            raise ValueError(f"config.devices: {device!r:.80} is not a recorded device")
+        tables[device["group"]][device["id"]] = device["params"]
+    return tables
+
+
+def recorded_code(
+    plugins: Sequence[str], tables: dict[str, dict[str, Any]], *, own_plugins: bool
+) -> list[str]:
+    """The code re-simulating a configuration would run, in words: its ``plugins`` (unless the
+    caller names its own), each device whose kind imports a file it names
+    (:data:`CODE_KINDS`), and, unless the caller names plug-ins, each device of a kind SimMeR
+    does not build in (only a plug-in or an installed package defines it); [] if it is data."""
+    code = (
+        [f"plug-ins ({', '.join(map(shown_name, plugins))})"] if plugins and not own_plugins else []
+    )
+    for group, table in tables.items():
+        for device_id, params in table.items():
+            kind = params.get("type", DEFAULT_KIND.get(group))
+            if not isinstance(kind, str):
+                continue  # not a kind: validation says so
+            if kind in CODE_KINDS:
+                module = params.get("module")
+                file = Path(module).name if isinstance(module, str) else "?"
+                code.append(f"device {shown_name(device_id)}'s class file ({shown_name(file)})")
+            elif kind not in BUILTIN_KINDS and not own_plugins:
+                code.append(
+                    f"device {shown_name(device_id)} of kind {shown_name(kind)}, which only a "
+                    "plug-in or an installed package defines"
+                )
+    if len(code) > MAX_CODE_NAMED:
+        code[MAX_CODE_NAMED:] = [f"and {len(code) - MAX_CODE_NAMED:,} more"]
+    return code
+
+
 def config_from_manifest(
     data: dict[str, Any], *, trust: bool = False, plugins: Sequence[str | Path] | None = None
 ) -> SimConfig:
     """Validate a manifest's configuration again (ConfigError if it no longer validates,
     e.g. a plug-in file is gone): the same settings and devices as the recorded run's.
 
-    A run folder is data: the plug-ins it names are imported (their code run) only with
-    ``trust``; ``plugins`` (files or module names of the caller's choosing, relative to the
-    working directory) are imported in their place. Otherwise a configuration with plug-ins is
-    a :class:`~simmer.errors.UntrustedRun`, and nothing is imported."""
+    A run folder is data: the code its configuration names (:func:`recorded_code`: plug-ins,
+    a device class's file) is imported (run) only with ``trust``; ``plugins`` (files or module
+    names of the caller's choosing, relative to the working directory) are imported in place
+    of the plug-ins it names. Otherwise a configuration naming code is a
+    :class:`~simmer.errors.UntrustedRun`, and nothing is imported."""
     if not isinstance(data.get("settings"), dict) or not isinstance(data.get("devices"), list):
         raise ValueError("its config has no settings table and devices list")
     named = recorded_plugins(data)
+    tables = _device_tables(data["devices"])
     raw = dict(data["settings"])
     if plugins is not None:
         raw["plugins"] = [str(Path(p).resolve()) if _is_file(p) else str(p) for p in plugins]
-    elif named and not trust:
-        raise UntrustedRun(named)
-    for device in data["devices"]:
-        if not isinstance(device, dict) or not isinstance(
-            raw.setdefault(device["group"], {}), dict
-        ):
-            raise ValueError(f"config.devices: {device!r:.80} is not a recorded device")
-        raw[device["group"]][device["id"]] = device["params"]
+    code = recorded_code(named, tables, own_plugins=plugins is not None)
+    if code and not trust:
+        raise UntrustedRun(code, plugins=bool(named))
+    for group, table in tables.items():
+        if not isinstance(raw.setdefault(group, {}), dict):
+            raise ValueError(f"config.settings.{group} is not a table of devices")
+        raw[group].update(table)
     config = config_from_dict(
         raw, str(data["source"]), Path(data["base_dir"]), original=bool(data["original"])
     )
@@ -293,7 +360,7 @@ def load_run(
     try:
         config = config_from_manifest(data["config"], trust=trust, plugins=plugins)
     except UntrustedRun as exc:
-        raise UntrustedRun(exc.plugins, str(where)) from None
+        raise UntrustedRun(exc.code, str(where), plugins=exc.names_plugins) from None
     except (TypeError, ValueError, AttributeError) as exc:  # a ConfigError is a SimmerError
         raise ValueError(f"{where}: not a run's manifest: {exc}") from None
     seed = data["seed"]
