@@ -995,7 +995,7 @@ def render(
     recording = _load_recording(folder, trust, plugin, max_seconds)
     path = output if output is not None else folder / "replay.mp4"
     try:
-        frames = write_clip(recording, path, start, end)
+        frames = write_clip(recording, path, start, end, run_folder=output is None)
     except ReplayError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None

@@ -16,6 +16,7 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── ReplayError            a run folder cannot be replayed or rendered
     │   └── UntrustedRun       its configuration names code (plug-ins, device files)
     ├── PlotError              a run folder cannot be plotted
+    ├── UnsafeOutput + OSError a file's name holds a link or no regular file: not written
     ├── BusClosed              the simulation loop has stopped
     ├── SweepError + ValueError     a sweep file SimMeR cannot run
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
@@ -122,6 +123,12 @@ class UntrustedRun(ReplayError):
 
 class PlotError(SimmerError):
     """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
+
+
+class UnsafeOutput(SimmerError, OSError):
+    """A file SimMeR would write (into a run folder, most often) is at a name that holds a
+    symbolic link, a folder, a pipe or a device, or the folder is a link: nothing is written
+    (an ``OSError``, so that "cannot write" handlers say it)."""
 
 
 class BusClosed(SimmerError):

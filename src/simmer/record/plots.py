@@ -43,8 +43,9 @@ from pydantic import ValidationError
 from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
-from simmer.errors import PlotError
+from simmer.errors import PlotError, UnsafeOutput
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.record.safefile import check_target, replacing, write_text
 from simmer.world.localization import (
     HEADING_TOLERANCE,
     MAX_ERRORS,
@@ -101,6 +102,14 @@ MAX_PATH_LABELS = 30
 """About as many command labels at most along the path (more are spaced further apart)."""
 MAX_TIME_LABELS = 40
 """Command labels at most across the sensor plot's width."""
+MAX_SOURCE_CHARS = 4096
+"""Characters of a manifest's ``config.source`` read (its last ones: a path is no longer);
+a 300,000-character one took 134 s to draw in the title."""
+MAX_SHOWN_CHARS = 60
+"""Characters of the configuration's name the title shows (then "...")."""
+MAX_REPORT_BYTES = 1_000_000
+"""Largest ``report.md`` (of some other origin) that ``simmer plot`` reads to link the plots
+from; SimMeR's own are a few kilobytes."""
 MAX_POSE_VALUE = 1e9
 """A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
 is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
@@ -472,12 +481,16 @@ def plot_run(folder: str | Path) -> list[Path]:
 
     run = read_run(folder)
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
-    write_path_plot(run, path)
-    write_sensor_plot(run, sensors)
-    images = [path, sensors]
-    if run.estimates:
-        images.append(run.folder / LOCALIZATION_IMAGE)
-        write_localization_plot(run, images[-1])
+    images = [path, sensors, *([run.folder / LOCALIZATION_IMAGE] if run.estimates else [])]
+    try:
+        for image in (*images, report):  # none is drawn if one cannot be written
+            check_target(image)
+        write_path_plot(run, path)
+        write_sensor_plot(run, sensors)
+        if run.estimates:
+            write_localization_plot(run, images[-1])
+    except OSError as exc:  # UnsafeOutput names the file
+        raise PlotError(str(exc) if isinstance(exc, UnsafeOutput) else _cannot(exc)) from None
     if (run.folder / REPORT_JSON).is_file():
         try:
             return [*images, write_report_md(run.folder)]
@@ -485,7 +498,16 @@ def plot_run(folder: str | Path) -> list[Path]:
             drawn = " and ".join(image.name for image in images)
             raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
     shown = [*IMAGES, LOCALIZATION_WORDS] if run.estimates else IMAGES
-    return [*images, report] if link_from_report(report, shown) else images
+    try:
+        return [*images, report] if link_from_report(report, shown) else images
+    except (OSError, ValueError) as exc:
+        drawn = " and ".join(image.name for image in images)
+        raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
+
+
+def _cannot(exc: OSError) -> str:
+    """A file that could not be written, in one line."""
+    return f"cannot write {exc.filename or 'the plots'}: {exc.strerror or exc}"
 
 
 def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
@@ -493,13 +515,17 @@ def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
     (if it exists) does not show yet; return whether it was changed."""
     if not report.is_file():
         return False
-    text = report.read_text(encoding="utf-8")
+    check_target(report)  # a link is neither read nor written through
+    with report.open(encoding="utf-8") as file:
+        text = file.read(MAX_REPORT_BYTES + 1)
+    if len(text) > MAX_REPORT_BYTES:
+        raise ValueError(f"{report} is larger than {MAX_REPORT_BYTES:,} characters")
     missing = [(name, alt) for name, alt in images if f"]({name}" not in text]
     if not missing:
         return False
     section = "\n".join(f"![{alt}]({name})\n" for name, alt in missing)
     lead = "" if text.endswith("\n\n") else "\n" if text.endswith("\n") else "\n\n"
-    report.write_text(f"{text}{lead}## Plots\n\n{section}", encoding="utf-8")
+    write_text(report, f"{text}{lead}## Plots\n\n{section}")
     return True
 
 
@@ -569,11 +595,13 @@ def write_sensor_plot(run: RecordedRun, target: Path) -> None:
 
 
 def _save(fig: Figure, target: Path) -> None:
-    """Write a figure as PNG with the Agg canvas (no pyplot, no window)."""
+    """Write a figure as PNG with the Agg canvas (no pyplot, no window), into a run folder
+    safely (:func:`~simmer.record.safefile.replacing`: never through a link at its name)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig)
-    fig.savefig(target, dpi=fig.dpi, format="png")
+    with replacing(target) as temp:
+        fig.savefig(temp, dpi=fig.dpi, format="png")
 
 
 def _rgb(color: Sequence[int]) -> tuple[float, float, float]:

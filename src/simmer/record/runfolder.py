@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -48,6 +50,7 @@ from simmer.record.eventlog import (
     read_events,
     stop_reason,
 )
+from simmer.record.safefile import check_target, write_text
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
 from simmer.world.events import Event
 from simmer.world.outcome import Outcome
@@ -70,6 +73,12 @@ PLOTS = (
 MAX_JSON_BYTES = 16_000_000
 """Largest ``manifest.json`` or ``report.json`` read: a manifest holds the largest maze allowed
 in under 1 MB; a larger file is not one SimMeR wrote, and parsing it costs seconds and memory."""
+MAX_REPORT_CHARS = 200
+"""Characters of one text (a program's command line, a configuration's name) that report.md
+copies from a run folder's files; the rest is cut ("..."): a manifest may hold megabytes."""
+MARKDOWN_SPECIAL = frozenset("\\`*_[]<>|!&~#$")
+"""Characters :func:`_md` escapes in copied text: those that start Markdown or HTML inside a
+line (a copied text never starts a line)."""
 MAX_RUN_SECONDS = 3600.0
 """Simulated seconds: a recorded run stops there unless ``--seconds`` says otherwise, and a
 replay re-simulates no further unless ``--max-seconds`` says so (an hour is some 200 MB of
@@ -107,18 +116,22 @@ def _finite(value: Any) -> Any:
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_text(path, json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
 
 
 def prepare_folder(folder: str | Path) -> Path:
     """Make the folder (and its parents) for a new run; OSError if that fails, FileExistsError
-    if it already holds a recorded run (which a new one would overwrite)."""
+    if it already holds a recorded run (which a new one would overwrite), UnsafeOutput if one
+    of a run's file names there holds a link or no regular file (it would be written
+    through)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    if (folder / MANIFEST).exists():
+    if os.path.lexists(folder / MANIFEST):
         raise FileExistsError(
             f"{folder} already holds a recorded run; record into a new folder, or delete it"
         )
+    for name in (MANIFEST, EVENTS, TRACE, REPORT_JSON, REPORT_MD):
+        check_target(folder / name)
     return folder
 
 
@@ -427,7 +440,7 @@ def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
         if start is not None and block is not None and isinstance(target, str | None):
             lines += [
                 f"Started at [{start[0]:g}, {start[1]:g}] heading {start[2]:g} deg; the block "
-                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {target}.",
+                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {_md(target)}.",
                 "",
             ]
     lines += ["| Milestone | Simulated time |", "| --- | --- |"]
@@ -436,7 +449,7 @@ def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
     wrong = outcome.get("wrong_zone")
     if isinstance(wrong, str) and not outcome.get("delivered"):
         at = _time(outcome.get("wrong_zone_at"))
-        lines.append(f"| Put it down in another drop-off zone | {wrong} at {at} |")
+        lines.append(f"| Put it down in another drop-off zone | {_md(wrong)} at {at} |")
     score = outcome.get("score")
     if isinstance(score, int | float) and not isinstance(score, bool):
         lines += ["", f"**Score: {score:g}** (the rubric is in the manifest).", ""]
@@ -468,8 +481,34 @@ def write_report_md(folder: str | Path) -> Path:
             f"{folder / REPORT_JSON} (or {MANIFEST}) is not what SimMeR writes: {what}"
         ) from None
     path = folder / REPORT_MD
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path
+
+
+def _printable(value: Any) -> str:
+    """Text read from a run folder as one line: at most :data:`MAX_REPORT_CHARS` characters,
+    every character that is not printable (a newline, a control or bidirectional one) written
+    as its escape (``\\n``, ``\\u202e``)."""
+    text = str(value)
+    if len(text) > MAX_REPORT_CHARS:
+        text = text[:MAX_REPORT_CHARS] + "..."
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
+
+
+def _md(value: Any) -> str:
+    """Text read from a run folder for report.md's prose and tables: :func:`_printable`, with
+    every character Markdown or HTML would read as markup escaped by a backslash (so ``<b>``,
+    ``[a](b)``, ``|`` and ``**`` stay text)."""
+    return "".join(f"\\{c}" if c in MARKDOWN_SPECIAL else c for c in _printable(value))
+
+
+def _code(value: Any) -> str:
+    """Text read from a run folder as a Markdown code span (:func:`_printable`), fenced by more
+    backticks than it holds in a row, so it cannot end the span early."""
+    text = _printable(value)
+    fence = "`" * (max((len(run) for run in re.findall("`+", text)), default=0) + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{pad}{text}{pad}{fence}"
 
 
 def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) -> list[str]:
@@ -479,32 +518,33 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     reached = f"yes, at {_seconds(outcome['reached_at'])}" if outcome["reached"] else "no"
     first = outcome["first_collision"]
     later = f" (first at {_seconds(first)})" if first is not None else ""
-    collisions = f"{outcome['collisions']}{later}"
-    ended = ENDINGS.get(report["ended_by"], report["ended_by"])
+    collisions = f"{_md(outcome['collisions'])}{later}"
+    ended_by = report["ended_by"]
+    ended = _md(ENDINGS.get(ended_by, ended_by) if isinstance(ended_by, str) else ended_by)
     if report["program_status"] is not None:
-        ended += f" with status {report['program_status']}"
-    program = f", program `{info['program']}`" if info["program"] else ""
-    clock = f", {info['clock']} clock" if info["clock"] else ""
+        ended += f" with status {_md(report['program_status'])}"
+    program = f", program {_code(info['program'])}" if info["program"] else ""
+    clock = f", {_md(info['clock'])} clock" if info["clock"] else ""
     started = datetime.fromisoformat(info["started"]).strftime("%Y-%m-%d %H:%M")
     lines = [
-        f"# SimMeR run: {folder.name}",
+        f"# SimMeR run: {_md(folder.name)}",
         "",
-        f"Recorded on {started} with SimMeR {info['simmer_version']}: configuration "
-        f"`{info['config']['source']}`, noise seed {info['seed']}{clock}{program}. Times are "
-        "simulated seconds; distances are inches.",
+        f"Recorded on {started} with SimMeR {_md(info['simmer_version'])}: configuration "
+        f"{_code(info['config']['source'])}, noise seed {_md(info['seed'])}{clock}{program}. "
+        "Times are simulated seconds; distances are inches.",
         "",
         "| | |",
         "| --- | --- |",
         f"| Reached the block | {reached} |",
         f"| Task 2 time (first motion to the block) | {_seconds(outcome['task2_time'])} |",
-        f"| Collisions | {collisions}; {outcome['blocked_steps']} steps blocked |",
+        f"| Collisions | {collisions}; {_md(outcome['blocked_steps'])} steps blocked |",
         f"| Path length | {outcome['path_length']:.1f} in |",
-        f"| Messages, commands | {outcome['messages']}, {outcome['commands']} |",
+        f"| Messages, commands | {_md(outcome['messages'])}, {_md(outcome['commands'])} |",
         f"| Busy replies (a drive still moving), NaN replies | "
-        f"{outcome.get('busy_replies', 0)}, {outcome['nan_replies']} |",
+        f"{_md(outcome.get('busy_replies', 0))}, {_md(outcome['nan_replies'])} |",
         f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
         *_localization_rows(outcome),
-        f"| Length of the run | {report['duration']:.2f} s ({report['steps']} steps), "
+        f"| Length of the run | {report['duration']:.2f} s ({_md(report['steps'])} steps), "
         f"{report['wall_seconds']:.1f} s of wall-clock time |",
         f"| How it ended | {ended} |",
         "",
@@ -517,10 +557,11 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     if "score" in outcome:
         lines += project_lines(outcome, info.get("scenario"))
     if report.get("recording_stopped"):
-        lines += [f"**{report['recording_stopped']}**; the files hold the run until then.", ""]
+        stopped = _md(report["recording_stopped"])
+        lines += [f"**{stopped}**; the files hold the run until then.", ""]
     if report["resets"]:
         count = report["resets"]
-        times = "once" if count == 1 else f"{count} times"
+        times = "once" if count == 1 else f"{_md(count)} times"
         lines += [f"The simulation was reset {times}; the figures count from the last reset.", ""]
     lines += [
         f"Files: `{MANIFEST}` (configuration, seed, versions), `{EVENTS}` (every command and "
@@ -532,7 +573,10 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     if plots:
         lines += ["## Plots", "", *(f"![{alt}]({name})\n" for name, alt in plots)]
     else:
-        lines += [f"`simmer plot {folder}` adds the path and the sensors' readings here.", ""]
+        lines += [
+            f"{_code(f'simmer plot {folder}')} adds the path and the sensors' readings here.",
+            "",
+        ]
     return lines
 
 
