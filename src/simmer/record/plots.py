@@ -346,7 +346,7 @@ def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
         settings,
         seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
         trace,
-        source if isinstance(source, str) else "",
+        source[-MAX_SOURCE_CHARS:] if isinstance(source, str) else "",
         kinds,
         scenario=_scenario(manifest.get("scenario")),
     )
@@ -626,8 +626,16 @@ def _title(run: RecordedRun) -> str:
     if run.seed is not None:
         parts.append(f"seed {run.seed}")
     if run.source:
-        parts.append(f"config {Path(run.source).name}")
+        parts.append(f"config {_shown(Path(run.source).name)}")
     return " · ".join(parts)
+
+
+def _shown(name: str) -> str:
+    """A name read from a run folder as a title shows it: at most :data:`MAX_SHOWN_CHARS`
+    characters, its ``$`` kept as text (matplotlib would read math between two)."""
+    if len(name) > MAX_SHOWN_CHARS:
+        name = name[:MAX_SHOWN_CHARS] + "..."
+    return name.replace("$", r"\$")
 
 
 def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
