@@ -516,10 +516,14 @@ def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
     if not report.is_file():
         return False
     check_target(report)  # a link is neither read nor written through
-    with report.open(encoding="utf-8") as file:
-        text = file.read(MAX_REPORT_BYTES + 1)
-    if len(text) > MAX_REPORT_BYTES:
-        raise ValueError(f"{report} is larger than {MAX_REPORT_BYTES:,} characters")
+    with report.open("rb") as file:
+        data = file.read(MAX_REPORT_BYTES + 1)
+    if len(data) > MAX_REPORT_BYTES:
+        raise ValueError(
+            f"{report} is larger than {MAX_REPORT_BYTES:,} bytes (MAX_REPORT_BYTES), more than "
+            "a report; move it away to have a new one written"
+        )
+    text = data.decode("utf-8")
     missing = [(name, alt) for name, alt in images if f"]({name}" not in text]
     if not missing:
         return False
