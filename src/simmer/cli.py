@@ -1055,7 +1055,7 @@ def sweep(
 ) -> None:
     """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
     summary.md (success rate per setting with 95% intervals)."""
-    from simmer.errors import SweepError
+    from simmer.errors import SweepError, UnsafeOutput
     from simmer.sweep import dask_engine, load_sweep, local_pool, run_sweep
 
     try:
@@ -1078,7 +1078,7 @@ def sweep(
     except SweepError as exc:  # a setting no run could use: found before any run
         err.print(f"{sweep_file}: {exc}", style="bold red", markup=False)
         raise typer.Exit(1) from None
-    except (FileExistsError, ValueError) as exc:
+    except (FileExistsError, ValueError, UnsafeOutput) as exc:  # a link where it writes
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:

@@ -47,20 +47,29 @@ def _what(mode: int) -> str:
     return "not a regular file (a device or a socket)"
 
 
+def check_folder(folder: Path, *, missing_ok: bool = False) -> None:
+    """Raise :class:`UnsafeOutput` unless ``folder`` is a real folder, not a link to one
+    (or, with ``missing_ok``, is not there yet)."""
+    try:
+        mode = os.lstat(folder).st_mode
+    except FileNotFoundError:
+        if missing_ok:
+            return
+        raise UnsafeOutput(f"cannot write into {folder}: there is no such folder") from None
+    except OSError as exc:
+        raise UnsafeOutput(f"cannot write into {folder}: {exc.strerror or exc}") from None
+    if not stat.S_ISDIR(mode):
+        raise UnsafeOutput(
+            f"{folder} is {_what(mode)}, not a folder of SimMeR's files: SimMeR writes only "
+            "into a real folder; give the folder's own path"
+        )
+
+
 def check_target(path: Path, *, run_folder: bool = True) -> None:
     """Raise :class:`UnsafeOutput` unless ``path`` may be written: its folder a real folder
     (not a link, when it is a run folder) and its name free or a regular file."""
     if run_folder:
-        folder = path.parent
-        try:
-            mode = os.lstat(folder).st_mode
-        except OSError as exc:
-            raise UnsafeOutput(f"cannot write into {folder}: {exc.strerror or exc}") from None
-        if not stat.S_ISDIR(mode):
-            raise UnsafeOutput(
-                f"{folder} is {_what(mode)}, not a run folder: SimMeR writes only into a real "
-                "folder; give the folder's own path"
-            )
+        check_folder(path.parent)
     try:
         mode = os.lstat(path).st_mode
     except FileNotFoundError:
@@ -116,7 +125,12 @@ def replacing(path: str | Path, *, run_folder: bool = True) -> Iterator[Path]:
     file.commit()
 
 
-def write_text(path: str | Path, text: str) -> None:
-    """Write ``text`` (UTF-8) at ``path`` in a run folder, safely (:func:`replacing`)."""
-    with replacing(path) as temp:
-        temp.write_text(text, encoding="utf-8")
+def write_bytes(path: str | Path, data: bytes, *, run_folder: bool = True) -> None:
+    """Write ``data`` at ``path``, safely (:func:`replacing`)."""
+    with replacing(path, run_folder=run_folder) as temp:
+        temp.write_bytes(data)
+
+
+def write_text(path: str | Path, text: str, *, run_folder: bool = True) -> None:
+    """Write ``text`` (UTF-8) at ``path``, safely (:func:`replacing`)."""
+    write_bytes(path, text.encode("utf-8"), run_folder=run_folder)
