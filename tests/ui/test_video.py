@@ -308,6 +308,19 @@ def test_p_saves_a_screenshot_of_the_window(
     assert "P" in dict(HELP)
 
 
+def test_a_screenshot_is_not_saved_through_a_link_at_its_name(
+    window: Window, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(time, "strftime", lambda _: "simmer-now")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (tmp_path / "simmer-now.png").symlink_to(elsewhere / "written.png")  # pointing nowhere yet
+    press(window, pygame.K_p)
+    assert list(elsewhere.iterdir()) == []
+    assert (tmp_path / "simmer-now-2.png").is_file()
+    assert window.bridge.latest.notice == f"saved the screenshot {tmp_path / 'simmer-now-2.png'}"
+
+
 # ----------------------------------------------------------------------------- simmer run
 
 
