@@ -203,6 +203,22 @@ def test_a_symlink_in_place_of_every_file_changes_nothing_outside(
     assert [v.read_bytes() for v in victims] == [VICTIM] * len(victims)
 
 
+@pytest.mark.parametrize(("command", "name"), [("plot", "report.md"), ("render", "replay.mp4")])
+def test_a_hard_link_in_the_folder_is_replaced_not_written_into(
+    folder: Path, command: str, name: str
+) -> None:
+    """A hard link is a regular file, so it is not refused; the new file takes its name and
+    the victim, the same file under another name outside, keeps its bytes."""
+    victim = folder.parent.parent / "victim"
+    victim.write_bytes(VICTIM)
+    (folder / name).unlink(missing_ok=True)
+    os.link(victim, folder / name)
+    done = simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    assert done.returncode == 0, done.stderr
+    assert victim.read_bytes() == VICTIM
+    assert (folder / name).stat().st_ino != victim.stat().st_ino
+
+
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
 def test_a_pipe_at_a_file_name_is_refused_not_opened(folder: Path) -> None:
     (folder / "path.png").unlink(missing_ok=True)

@@ -14,7 +14,9 @@ plots, a rendered clip) and every video goes through :class:`SafeFile`:
 
 Why a new file and a rename, rather than opening the name with ``O_NOFOLLOW``: the rename
 replaces the name itself and never follows what is there, so even a link put in its place
-after the check is replaced, not written through; it works on Windows, which has no
+after the check is replaced, not written through, and a hard link to a file elsewhere (a
+regular file, which ``O_NOFOLLOW`` would open and overwrite) loses the name while the file
+elsewhere keeps its bytes; it works on Windows, which has no
 ``O_NOFOLLOW``; a reader never sees half a file, and a plot stopped midway leaves the old one
 whole; and matplotlib's ``savefig`` and PyAV write the new file by its path like any other.
 """
