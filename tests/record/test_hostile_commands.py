@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from simmer.record.plots import MAX_SHOWN_CHARS, MAX_SOURCE_CHARS, _title, read_run
-from simmer.record.runfolder import MAX_REPORT_CHARS
+from simmer.record.plots import MAX_SHOWN_CHARS, _title, read_run
+from simmer.record.runfolder import MAX_REPORT_CHARS, MAX_SOURCE_CHARS
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -273,3 +273,17 @@ def test_a_long_configuration_name_is_drawn_short(folder: Path) -> None:
     done = simmer("plot", folder, cwd=folder.parent)
     assert done.returncode == 0, done.stderr
     assert (folder / "report.md").stat().st_size < 10_000
+
+
+@pytest.mark.parametrize("command", ["replay --check", "render"])
+def test_a_long_configuration_name_is_said_short_when_it_no_longer_loads(
+    folder: Path, command: str
+) -> None:
+    manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    manifest["config"]["source"] = "a\nb" * 1_000_000 + ".toml"
+    manifest["config"]["settings"]["ppi"] = -1  # so the configuration's name is in the message
+    (folder / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    line = one_plain_line(
+        simmer(*COMMANDS[command], folder, cwd=folder.parent), "no longer loads", "ppi"
+    )
+    assert len(line) < MAX_SOURCE_CHARS * 2 + 300  # every newline written as two characters

@@ -102,9 +102,6 @@ MAX_PATH_LABELS = 30
 """About as many command labels at most along the path (more are spaced further apart)."""
 MAX_TIME_LABELS = 40
 """Command labels at most across the sensor plot's width."""
-MAX_SOURCE_CHARS = 4096
-"""Characters of a manifest's ``config.source`` read (its last ones: a path is no longer);
-a 300,000-character one took 134 s to draw in the title."""
 MAX_SHOWN_CHARS = 60
 """Characters of the configuration's name the title shows (then "...")."""
 MAX_REPORT_BYTES = 1_000_000
@@ -316,7 +313,7 @@ def _number(cell: str) -> float | None:
 
 def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
     """The run a manifest describes, with this trace (no events yet)."""
-    from simmer.record.runfolder import read_manifest
+    from simmer.record.runfolder import read_manifest, recorded_source
 
     if not path.is_file():
         raise PlotError(f"no {MANIFEST_FILE} in {path.parent}: the maze to draw is unknown")
@@ -346,7 +343,7 @@ def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
         settings,
         seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
         trace,
-        source[-MAX_SOURCE_CHARS:] if isinstance(source, str) else "",
+        recorded_source(source) if isinstance(source, str) else "",
         kinds,
         scenario=_scenario(manifest.get("scenario")),
     )

@@ -187,6 +187,19 @@ MAX_CODE_NAMED = 3
 manifest listing thousands of devices still gets one line."""
 MAX_NAME_CHARS = 60
 """Characters of a name read from a run folder that a message shows."""
+MAX_SOURCE_CHARS = 4096
+"""Characters of a manifest's ``config.source`` (the configuration's path) kept: its last ones,
+as no path is longer. A 300,000-character one took 134 s to draw in a plot's title, and a
+replay refusing the configuration printed all 10,000,000 of another."""
+
+
+def recorded_source(text: str) -> str:
+    """A manifest's ``config.source`` as SimMeR shows it: its last :data:`MAX_SOURCE_CHARS`
+    characters, any that is not printable (a newline, a control character) as its escape."""
+    text = text[-MAX_SOURCE_CHARS:]
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
 
 
 def shown_name(text: str) -> str:
@@ -269,7 +282,10 @@ def config_from_manifest(
             raise ValueError(f"config.settings.{group} is not a table of devices")
         raw[group].update(table)
     config = config_from_dict(
-        raw, str(data["source"]), Path(data["base_dir"]), original=bool(data["original"])
+        raw,
+        recorded_source(str(data["source"])),
+        Path(data["base_dir"]),
+        original=bool(data["original"]),
     )
     return replace(config, origin=str(data.get("origin", "")))
 
