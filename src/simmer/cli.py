@@ -1103,7 +1103,7 @@ def render(
     recording = _load_recording(folder, trust, plugin, max_seconds)
     path = output if output is not None else folder / "replay.mp4"
     try:
-        frames = write_clip(recording, path, start, end)
+        frames = write_clip(recording, path, start, end, run_folder=output is None)
     except ReplayError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
@@ -1165,7 +1165,7 @@ def sweep(
 ) -> None:
     """Run a controller over seeds and settings in parallel: results.csv (a row per run) and
     summary.md (success rate per setting with 95% intervals)."""
-    from simmer.errors import SweepError
+    from simmer.errors import SweepError, UnsafeOutput
     from simmer.sweep import dask_engine, load_sweep, local_pool, run_sweep
 
     try:
@@ -1188,7 +1188,7 @@ def sweep(
     except SweepError as exc:  # a setting no run could use: found before any run
         err.print(f"{sweep_file}: {exc}", style="bold red", markup=False)
         raise typer.Exit(1) from None
-    except (FileExistsError, ValueError) as exc:
+    except (FileExistsError, ValueError, UnsafeOutput) as exc:  # a link where it writes
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
     except KeyboardInterrupt as exc:

@@ -14,8 +14,9 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     │   ├── ConnectionFailed
     │   └── ReplyTimeout
     ├── ReplayError            a run folder cannot be replayed or rendered
-    │   └── UntrustedRun       its plug-ins would run code
+    │   └── UntrustedRun       its configuration names code (plug-ins, device files)
     ├── PlotError              a run folder cannot be plotted
+    ├── UnsafeOutput + OSError a file's name holds a link or no regular file: not written
     ├── BusClosed              the simulation loop has stopped
     ├── SweepError + ValueError     a sweep file SimMeR cannot run
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
@@ -103,21 +104,31 @@ class ReplayError(SimmerError):
 
 
 class UntrustedRun(ReplayError):
-    """A run folder's configuration names plug-ins, and re-simulating it would run their code."""
+    """A run folder's configuration names code (plug-ins, a device class's file, a kind only
+    a plug-in or package defines), and re-simulating it would run that code."""
 
-    def __init__(self, plugins: Sequence[str], where: str = "") -> None:
-        self.plugins = list(plugins)
-        names = ", ".join(self.plugins)
+    def __init__(self, code: Sequence[str], where: str = "", *, plugins: bool = False) -> None:
+        self.code = list(code)
+        self.names_plugins = plugins
+        own_copies = (
+            "; or name your own copies of its plug-ins with --plugin FILE" if plugins else ""
+        )
         super().__init__(
-            f"{where or 'the manifest'}: the run was recorded with plug-ins ({names}), and "
-            "re-simulating it runs their code: a run folder is data, so SimMeR does not, unless "
-            "asked. If you trust whoever made the folder, add --trust; or name your own copies "
-            "with --plugin FILE"
+            f"{where or 'the manifest'}: the run's configuration names code: "
+            f"{'; '.join(self.code)}. Re-simulating it runs that code, and a run folder is data, "
+            "so SimMeR does not unless asked: if you trust whoever made the folder, add "
+            f"--trust{own_copies}"
         )
 
 
 class PlotError(SimmerError):
     """A run folder could not be plotted (no trace, no manifest, unreadable files)."""
+
+
+class UnsafeOutput(SimmerError, OSError):
+    """A file SimMeR would write (into a run folder, most often) is at a name that holds a
+    symbolic link, a folder, a pipe or a device, or the folder is a link: nothing is written
+    (an ``OSError``, so that "cannot write" handlers say it)."""
 
 
 class BusClosed(SimmerError):

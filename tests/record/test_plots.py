@@ -19,6 +19,7 @@ from simmer.cli import app
 from simmer.config import load_config
 from simmer.errors import PlotError
 from simmer.record.plots import (
+    MAX_REPORT_BYTES,
     PATH_COLOR,
     plot_run,
     read_run,
@@ -156,6 +157,17 @@ def test_a_report_that_already_shows_the_plots_is_left_alone(tmp_path: Path) -> 
     (folder / "report.md").write_text(text, encoding="utf-8")
     assert len(plot_run(folder)) == 2
     assert (folder / "report.md").read_text(encoding="utf-8") == text
+
+
+def test_a_report_larger_than_any_is_not_read_whole(tmp_path: Path) -> None:
+    folder = tmp_path / "run"
+    write_run(folder, lab_path())
+    big = b"# Run\n" + b"x" * MAX_REPORT_BYTES
+    (folder / "report.md").write_bytes(big)
+    with pytest.raises(PlotError, match=r"but not report\.md: .*MAX_REPORT_BYTES"):
+        plot_run(folder)
+    assert (folder / "report.md").read_bytes() == big
+    assert (folder / "path.png").is_file()
 
 
 def test_sensor_panels_group_by_kind_or_else_by_id_prefix(tmp_path: Path) -> None:

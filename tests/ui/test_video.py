@@ -204,12 +204,15 @@ def test_memory_does_not_grow_with_the_length_of_the_video(tmp_path: Path) -> No
     path = tmp_path / "long.mp4"
     sim.command("r0-3600")  # turning on the spot: every frame differs
     with VideoRecorder(sim, path) as recorder:
+        (writing,) = tmp_path.glob(".long.mp4.*")  # put at its name when closed
         sim.step(5 * 60)
         early = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        written = path.stat().st_size
+        written = writing.stat().st_size
         sim.step(20 * 60)
         late = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        assert path.stat().st_size > written > 0  # encoded as they come, not at the end
+        assert writing.stat().st_size > written > 0  # encoded as they come, not at the end
+    assert path.stat().st_size > written
+    assert not writing.exists()
     assert recorder.frames == 25 * FPS + 1
     assert (late - early) * 1024 < 40e6  # 600 more frames would hold 1.3 GB of pixels
 
@@ -303,6 +306,19 @@ def test_p_saves_a_screenshot_of_the_window(
     assert np.array_equal(saved, shown)
     assert window.bridge.latest.notice == f"saved the screenshot {second}"  # named in the HUD
     assert "P" in dict(HELP)
+
+
+def test_a_screenshot_is_not_saved_through_a_link_at_its_name(
+    window: Window, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(time, "strftime", lambda _: "simmer-now")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (tmp_path / "simmer-now.png").symlink_to(elsewhere / "written.png")  # pointing nowhere yet
+    press(window, pygame.K_p)
+    assert list(elsewhere.iterdir()) == []
+    assert (tmp_path / "simmer-now-2.png").is_file()
+    assert window.bridge.latest.notice == f"saved the screenshot {tmp_path / 'simmer-now-2.png'}"
 
 
 # ----------------------------------------------------------------------------- simmer run

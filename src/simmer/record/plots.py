@@ -44,8 +44,9 @@ from pydantic import ValidationError
 from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
-from simmer.errors import PlotError
+from simmer.errors import PlotError, UnsafeOutput
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.record.safefile import check_target, replacing, write_text
 from simmer.untrusted import drawable, parse_json
 from simmer.world.localization import (
     HEADING_TOLERANCE,
@@ -105,6 +106,11 @@ MAX_PATH_LABELS = 30
 """About as many command labels at most along the path (more are spaced further apart)."""
 MAX_TIME_LABELS = 40
 """Command labels at most across the sensor plot's width."""
+MAX_SHOWN_CHARS = 60
+"""Characters of the configuration's name the title shows (then "...")."""
+MAX_REPORT_BYTES = 1_000_000
+"""Largest ``report.md`` (of some other origin) that ``simmer plot`` reads to link the plots
+from; SimMeR's own are a few kilobytes."""
 MAX_POSE_VALUE = 1e9
 """A trace row whose time, x, y or heading is larger (or not finite) is not a recorded pose and
 is left out (a command's value is at most 1e9 too): an edited 1e300 printed a path length of
@@ -312,7 +318,7 @@ def _number(cell: str) -> float | None:
 
 def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
     """The run a manifest describes, with this trace (no events yet)."""
-    from simmer.record.runfolder import read_manifest
+    from simmer.record.runfolder import read_manifest, recorded_source
 
     if not path.is_file():
         raise PlotError(f"no {MANIFEST_FILE} in {path.parent}: the maze to draw is unknown")
@@ -342,7 +348,7 @@ def _read_manifest(path: Path, folder: Path, trace: Trace) -> RecordedRun:
         settings,
         seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
         trace,
-        source if isinstance(source, str) else "",
+        recorded_source(source) if isinstance(source, str) else "",
         kinds,
         scenario=_scenario(manifest.get("scenario")),
     )
@@ -508,12 +514,16 @@ def plot_run(folder: str | Path, say: Callable[[str], None] = log.warning) -> li
     if (said := cut_short_of(run.folder, run.trace)) is not None:
         say(said)
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
-    write_path_plot(run, path)
-    write_sensor_plot(run, sensors)
-    images = [path, sensors]
-    if run.estimates:
-        images.append(run.folder / LOCALIZATION_IMAGE)
-        write_localization_plot(run, images[-1])
+    images = [path, sensors, *([run.folder / LOCALIZATION_IMAGE] if run.estimates else [])]
+    try:
+        for image in (*images, report):  # none is drawn if one cannot be written
+            check_target(image)
+        write_path_plot(run, path)
+        write_sensor_plot(run, sensors)
+        if run.estimates:
+            write_localization_plot(run, images[-1])
+    except OSError as exc:  # UnsafeOutput names the file
+        raise PlotError(str(exc) if isinstance(exc, UnsafeOutput) else _cannot(exc)) from None
     if (run.folder / REPORT_JSON).is_file():
         try:
             return [*images, write_report_md(run.folder)]
@@ -521,7 +531,16 @@ def plot_run(folder: str | Path, say: Callable[[str], None] = log.warning) -> li
             drawn = " and ".join(image.name for image in images)
             raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
     shown = [*IMAGES, LOCALIZATION_WORDS] if run.estimates else IMAGES
-    return [*images, report] if link_from_report(report, shown) else images
+    try:
+        return [*images, report] if link_from_report(report, shown) else images
+    except (OSError, ValueError) as exc:
+        drawn = " and ".join(image.name for image in images)
+        raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
+
+
+def _cannot(exc: OSError) -> str:
+    """A file that could not be written, in one line."""
+    return f"cannot write {exc.filename or 'the plots'}: {exc.strerror or exc}"
 
 
 def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
@@ -529,13 +548,21 @@ def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
     (if it exists) does not show yet; return whether it was changed."""
     if not report.is_file():
         return False
-    text = report.read_text(encoding="utf-8")
+    check_target(report)  # a link is neither read nor written through
+    with report.open("rb") as file:
+        data = file.read(MAX_REPORT_BYTES + 1)
+    if len(data) > MAX_REPORT_BYTES:
+        raise ValueError(
+            f"{report} is larger than {MAX_REPORT_BYTES:,} bytes (MAX_REPORT_BYTES), more than "
+            "a report; move it away to have a new one written"
+        )
+    text = data.decode("utf-8")
     missing = [(name, alt) for name, alt in images if f"]({name}" not in text]
     if not missing:
         return False
     section = "\n".join(f"![{alt}]({name})\n" for name, alt in missing)
     lead = "" if text.endswith("\n\n") else "\n" if text.endswith("\n") else "\n\n"
-    report.write_text(f"{text}{lead}## Plots\n\n{section}", encoding="utf-8")
+    write_text(report, f"{text}{lead}## Plots\n\n{section}")
     return True
 
 
@@ -605,12 +632,14 @@ def write_sensor_plot(run: RecordedRun, target: Path) -> None:
 
 
 def _save(fig: Figure, target: Path) -> None:
-    """Write a figure as PNG with the Agg canvas (no pyplot, no window)."""
+    """Write a figure as PNG with the Agg canvas (no pyplot, no window), into a run folder
+    safely (:func:`~simmer.record.safefile.replacing`: never through a link at its name)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     drawable_texts(fig)
     FigureCanvasAgg(fig)
-    fig.savefig(target, dpi=fig.dpi, format="png")
+    with replacing(target) as temp:
+        fig.savefig(temp, dpi=fig.dpi, format="png")
 
 
 def drawable_texts(fig: Figure) -> None:
@@ -659,8 +688,16 @@ def _title(run: RecordedRun) -> str:
     if run.seed is not None:
         parts.append(f"seed {run.seed}")
     if run.source:
-        parts.append(f"config {Path(run.source).name}")
+        parts.append(f"config {_shown(Path(run.source).name)}")
     return " · ".join(parts)
+
+
+def _shown(name: str) -> str:
+    """A name read from a run folder as a title shows it: at most :data:`MAX_SHOWN_CHARS`
+    characters, its ``$`` kept as text (matplotlib would read math between two)."""
+    if len(name) > MAX_SHOWN_CHARS:
+        name = name[:MAX_SHOWN_CHARS] + "..."
+    return name.replace("$", r"\$")
 
 
 def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:

@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -36,8 +38,9 @@ from types import TracebackType
 from typing import Any, NamedTuple
 
 import simmer
-from simmer.config.models import SimConfig
-from simmer.config.validate import config_from_dict
+from simmer.config.models import DEVICE_GROUPS, SimConfig
+from simmer.config.validate import DEFAULT_KIND, config_from_dict
+from simmer.devices.registry import BUILTIN_KINDS
 from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
@@ -47,6 +50,7 @@ from simmer.record.eventlog import (
     read_events,
     stop_reason,
 )
+from simmer.record.safefile import check_target, write_text
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
 from simmer.untrusted import parse_json
 from simmer.world.events import Event
@@ -70,6 +74,12 @@ PLOTS = (
 MAX_JSON_BYTES = 16_000_000
 """Largest ``manifest.json`` or ``report.json`` read: a manifest holds the largest maze allowed
 in under 1 MB; a larger file is not one SimMeR wrote, and parsing it costs seconds and memory."""
+MAX_REPORT_CHARS = 200
+"""Characters of one text (a program's command line, a configuration's name) that report.md
+copies from a run folder's files; the rest is cut ("..."): a manifest may hold megabytes."""
+MARKDOWN_SPECIAL = frozenset("\\`*_[]<>|!&~#$")
+"""Characters :func:`_md` escapes in copied text: those that start Markdown or HTML inside a
+line (a copied text never starts a line)."""
 MAX_RUN_SECONDS = 3600.0
 """Simulated seconds: a recorded run stops there unless ``--seconds`` says otherwise, and a
 replay re-simulates no further unless ``--max-seconds`` says so (an hour is some 200 MB of
@@ -107,18 +117,22 @@ def _finite(value: Any) -> Any:
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_text(path, json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
 
 
 def prepare_folder(folder: str | Path) -> Path:
     """Make the folder (and its parents) for a new run; OSError if that fails, FileExistsError
-    if it already holds a recorded run (which a new one would overwrite)."""
+    if it already holds a recorded run (which a new one would overwrite), UnsafeOutput if one
+    of a run's file names there holds a link or no regular file (it would be written
+    through)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    if (folder / MANIFEST).exists():
+    if os.path.lexists(folder / MANIFEST):
         raise FileExistsError(
             f"{folder} already holds a recorded run; record into a new folder, or delete it"
         )
+    for name in (MANIFEST, EVENTS, TRACE, REPORT_JSON, REPORT_MD):
+        check_target(folder / name)
     return folder
 
 
@@ -165,32 +179,114 @@ def recorded_plugins(data: dict[str, Any]) -> list[str]:
     return list(plugins)
 
 
+CODE_KINDS = frozenset({"simmer_device"})
+"""Built-in device kinds that import a file their configuration names (the original SimMeR's
+device classes, :mod:`simmer.compat.template`): in a run folder that file is code, as a plug-in
+is, and is imported only with ``trust``."""
+MAX_CODE_NAMED = 3
+"""Pieces of code an :class:`~simmer.errors.UntrustedRun` names (then how many more), so that a
+manifest listing thousands of devices still gets one line."""
+MAX_NAME_CHARS = 60
+"""Characters of a name read from a run folder that a message shows."""
+MAX_SOURCE_CHARS = 4096
+"""Characters of a manifest's ``config.source`` (the configuration's path) kept: its last ones,
+as no path is longer. A 300,000-character one took 134 s to draw in a plot's title, and a
+replay refusing the configuration printed all 10,000,000 of another."""
+
+
+def recorded_source(text: str) -> str:
+    """A manifest's ``config.source`` as SimMeR shows it: its last :data:`MAX_SOURCE_CHARS`
+    characters, any that is not printable (a newline, a control character) as its escape."""
+    text = text[-MAX_SOURCE_CHARS:]
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
+
+
+def shown_name(text: str) -> str:
+    """A name read from a run folder, for a one-line message: as it is if printable and short,
+    else its first :data:`MAX_NAME_CHARS` characters quoted with escapes (no newline, no
+    control or bidirectional character reaches the terminal)."""
+    if text.isprintable() and len(text) <= MAX_NAME_CHARS:
+        return text
+    return repr(text[:MAX_NAME_CHARS]) + ("..." if len(text) > MAX_NAME_CHARS else "")
+
+
+def _device_tables(devices: list[Any]) -> dict[str, dict[str, Any]]:
+    """A manifest's ``config.devices`` as the configuration's device tables, by group (ValueError
+    for an entry that is not a recorded device)."""
+    tables: dict[str, dict[str, Any]] = {group: {} for group in DEVICE_GROUPS}
+    for device in devices:
+        if not (
+            isinstance(device, dict)
+            and device.get("group") in DEVICE_GROUPS
+            and isinstance(device.get("id"), str)
+            and isinstance(device.get("params"), dict)
+        ):
+            raise ValueError(f"config.devices: {device!r:.80} is not a recorded device")
+        tables[device["group"]][device["id"]] = device["params"]
+    return tables
+
+
+def recorded_code(
+    plugins: Sequence[str], tables: dict[str, dict[str, Any]], *, own_plugins: bool
+) -> list[str]:
+    """The code re-simulating a configuration would run, in words: its ``plugins`` (unless the
+    caller names its own), each device whose kind imports a file it names
+    (:data:`CODE_KINDS`), and, unless the caller names plug-ins, each device of a kind SimMeR
+    does not build in (only a plug-in or an installed package defines it); [] if it is data."""
+    code = (
+        [f"plug-ins ({', '.join(map(shown_name, plugins))})"] if plugins and not own_plugins else []
+    )
+    for group, table in tables.items():
+        for device_id, params in table.items():
+            kind = params.get("type", DEFAULT_KIND.get(group))
+            if not isinstance(kind, str):
+                continue  # not a kind: validation says so
+            if kind in CODE_KINDS:
+                module = params.get("module")
+                file = Path(module).name if isinstance(module, str) else "?"
+                code.append(f"device {shown_name(device_id)}'s class file ({shown_name(file)})")
+            elif kind not in BUILTIN_KINDS and not own_plugins:
+                code.append(
+                    f"device {shown_name(device_id)} of kind {shown_name(kind)}, which only a "
+                    "plug-in or an installed package defines"
+                )
+    if len(code) > MAX_CODE_NAMED:
+        code[MAX_CODE_NAMED:] = [f"and {len(code) - MAX_CODE_NAMED:,} more"]
+    return code
+
+
 def config_from_manifest(
     data: dict[str, Any], *, trust: bool = False, plugins: Sequence[str | Path] | None = None
 ) -> SimConfig:
     """Validate a manifest's configuration again (ConfigError if it no longer validates,
     e.g. a plug-in file is gone): the same settings and devices as the recorded run's.
 
-    A run folder is data: the plug-ins it names are imported (their code run) only with
-    ``trust``; ``plugins`` (files or module names of the caller's choosing, relative to the
-    working directory) are imported in their place. Otherwise a configuration with plug-ins is
-    a :class:`~simmer.errors.UntrustedRun`, and nothing is imported."""
+    A run folder is data: the code its configuration names (:func:`recorded_code`: plug-ins,
+    a device class's file) is imported (run) only with ``trust``; ``plugins`` (files or module
+    names of the caller's choosing, relative to the working directory) are imported in place
+    of the plug-ins it names. Otherwise a configuration naming code is a
+    :class:`~simmer.errors.UntrustedRun`, and nothing is imported."""
     if not isinstance(data.get("settings"), dict) or not isinstance(data.get("devices"), list):
         raise ValueError("its config has no settings table and devices list")
     named = recorded_plugins(data)
+    tables = _device_tables(data["devices"])
     raw = dict(data["settings"])
     if plugins is not None:
         raw["plugins"] = [str(Path(p).resolve()) if _is_file(p) else str(p) for p in plugins]
-    elif named and not trust:
-        raise UntrustedRun(named)
-    for device in data["devices"]:
-        if not isinstance(device, dict) or not isinstance(
-            raw.setdefault(device["group"], {}), dict
-        ):
-            raise ValueError(f"config.devices: {device!r:.80} is not a recorded device")
-        raw[device["group"]][device["id"]] = device["params"]
+    code = recorded_code(named, tables, own_plugins=plugins is not None)
+    if code and not trust:
+        raise UntrustedRun(code, plugins=bool(named))
+    for group, table in tables.items():
+        if not isinstance(raw.setdefault(group, {}), dict):
+            raise ValueError(f"config.settings.{group} is not a table of devices")
+        raw[group].update(table)
     config = config_from_dict(
-        raw, str(data["source"]), Path(data["base_dir"]), original=bool(data["original"])
+        raw,
+        recorded_source(str(data["source"])),
+        Path(data["base_dir"]),
+        original=bool(data["original"]),
     )
     return replace(config, origin=str(data.get("origin", "")))
 
@@ -291,7 +387,7 @@ def load_run(
     try:
         config = config_from_manifest(data["config"], trust=trust, plugins=plugins)
     except UntrustedRun as exc:
-        raise UntrustedRun(exc.plugins, str(where)) from None
+        raise UntrustedRun(exc.code, str(where), plugins=exc.names_plugins) from None
     except (TypeError, ValueError, AttributeError) as exc:  # a ConfigError is a SimmerError
         raise ValueError(f"{where}: not a run's manifest: {exc}") from None
     seed = data["seed"]
@@ -358,7 +454,7 @@ def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
         if start is not None and block is not None and isinstance(target, str | None):
             lines += [
                 f"Started at [{start[0]:g}, {start[1]:g}] heading {start[2]:g} deg; the block "
-                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {target}.",
+                f"at [{block[0]:.2f}, {block[1]:.2f}]; target zone {_md(target)}.",
                 "",
             ]
     lines += ["| Milestone | Simulated time |", "| --- | --- |"]
@@ -367,7 +463,7 @@ def project_lines(outcome: dict[str, Any], scenario: Any) -> list[str]:
     wrong = outcome.get("wrong_zone")
     if isinstance(wrong, str) and not outcome.get("delivered"):
         at = _time(outcome.get("wrong_zone_at"))
-        lines.append(f"| Put it down in another drop-off zone | {wrong} at {at} |")
+        lines.append(f"| Put it down in another drop-off zone | {_md(wrong)} at {at} |")
     score = outcome.get("score")
     if isinstance(score, int | float) and not isinstance(score, bool):
         lines += ["", f"**Score: {score:g}** (the rubric is in the manifest).", ""]
@@ -399,8 +495,34 @@ def write_report_md(folder: str | Path) -> Path:
             f"{folder / REPORT_JSON} (or {MANIFEST}) is not what SimMeR writes: {what}"
         ) from None
     path = folder / REPORT_MD
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path
+
+
+def _printable(value: Any) -> str:
+    """Text read from a run folder as one line: at most :data:`MAX_REPORT_CHARS` characters,
+    every character that is not printable (a newline, a control or bidirectional one) written
+    as its escape (``\\n``, ``\\u202e``)."""
+    text = str(value)
+    if len(text) > MAX_REPORT_CHARS:
+        text = text[:MAX_REPORT_CHARS] + "..."
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
+
+
+def _md(value: Any) -> str:
+    """Text read from a run folder for report.md's prose and tables: :func:`_printable`, with
+    every character Markdown or HTML would read as markup escaped by a backslash (so ``<b>``,
+    ``[a](b)``, ``|`` and ``**`` stay text)."""
+    return "".join(f"\\{c}" if c in MARKDOWN_SPECIAL else c for c in _printable(value))
+
+
+def _code(value: Any) -> str:
+    """Text read from a run folder as a Markdown code span (:func:`_printable`), fenced by more
+    backticks than it holds in a row, so it cannot end the span early."""
+    text = _printable(value)
+    fence = "`" * (max((len(run) for run in re.findall("`+", text)), default=0) + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{pad}{text}{pad}{fence}"
 
 
 def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) -> list[str]:
@@ -410,32 +532,33 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     reached = f"yes, at {_seconds(outcome['reached_at'])}" if outcome["reached"] else "no"
     first = outcome["first_collision"]
     later = f" (first at {_seconds(first)})" if first is not None else ""
-    collisions = f"{outcome['collisions']}{later}"
-    ended = ENDINGS.get(report["ended_by"], report["ended_by"])
+    collisions = f"{_md(outcome['collisions'])}{later}"
+    ended_by = report["ended_by"]
+    ended = _md(ENDINGS.get(ended_by, ended_by) if isinstance(ended_by, str) else ended_by)
     if report["program_status"] is not None:
-        ended += f" with status {report['program_status']}"
-    program = f", program `{info['program']}`" if info["program"] else ""
-    clock = f", {info['clock']} clock" if info["clock"] else ""
+        ended += f" with status {_md(report['program_status'])}"
+    program = f", program {_code(info['program'])}" if info["program"] else ""
+    clock = f", {_md(info['clock'])} clock" if info["clock"] else ""
     started = datetime.fromisoformat(info["started"]).strftime("%Y-%m-%d %H:%M")
     lines = [
-        f"# SimMeR run: {folder.name}",
+        f"# SimMeR run: {_md(folder.name)}",
         "",
-        f"Recorded on {started} with SimMeR {info['simmer_version']}: configuration "
-        f"`{info['config']['source']}`, noise seed {info['seed']}{clock}{program}. Times are "
-        "simulated seconds; distances are inches.",
+        f"Recorded on {started} with SimMeR {_md(info['simmer_version'])}: configuration "
+        f"{_code(info['config']['source'])}, noise seed {_md(info['seed'])}{clock}{program}. "
+        "Times are simulated seconds; distances are inches.",
         "",
         "| | |",
         "| --- | --- |",
         f"| Reached the block | {reached} |",
         f"| Task 2 time (first motion to the block) | {_seconds(outcome['task2_time'])} |",
-        f"| Collisions | {collisions}; {outcome['blocked_steps']} steps blocked |",
+        f"| Collisions | {collisions}; {_md(outcome['blocked_steps'])} steps blocked |",
         f"| Path length | {outcome['path_length']:.1f} in |",
-        f"| Messages, commands | {outcome['messages']}, {outcome['commands']} |",
+        f"| Messages, commands | {_md(outcome['messages'])}, {_md(outcome['commands'])} |",
         f"| Busy replies (a drive still moving), NaN replies | "
-        f"{outcome.get('busy_replies', 0)}, {outcome['nan_replies']} |",
+        f"{_md(outcome.get('busy_replies', 0))}, {_md(outcome['nan_replies'])} |",
         f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
         *_localization_rows(outcome),
-        f"| Length of the run | {report['duration']:.2f} s ({report['steps']} steps), "
+        f"| Length of the run | {report['duration']:.2f} s ({_md(report['steps'])} steps), "
         f"{report['wall_seconds']:.1f} s of wall-clock time |",
         f"| How it ended | {ended} |",
         "",
@@ -448,10 +571,11 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     if "score" in outcome:
         lines += project_lines(outcome, info.get("scenario"))
     if report.get("recording_stopped"):
-        lines += [f"**{report['recording_stopped']}**; the files hold the run until then.", ""]
+        stopped = _md(report["recording_stopped"])
+        lines += [f"**{stopped}**; the files hold the run until then.", ""]
     if report["resets"]:
         count = report["resets"]
-        times = "once" if count == 1 else f"{count} times"
+        times = "once" if count == 1 else f"{_md(count)} times"
         lines += [f"The simulation was reset {times}; the figures count from the last reset.", ""]
     lines += [
         f"Files: `{MANIFEST}` (configuration, seed, versions), `{EVENTS}` (every command and "
@@ -463,7 +587,10 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     if plots:
         lines += ["## Plots", "", *(f"![{alt}]({name})\n" for name, alt in plots)]
     else:
-        lines += [f"`simmer plot {folder}` adds the path and the sensors' readings here.", ""]
+        lines += [
+            f"{_code(f'simmer plot {folder}')} adds the path and the sensors' readings here.",
+            "",
+        ]
     return lines
 
 

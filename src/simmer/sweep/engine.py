@@ -49,6 +49,7 @@ from rich.progress import (
 
 from simmer.errors import SweepStopped
 from simmer.proctree import adopt_orphans, descendants, still_running, stop_strays
+from simmer.record.safefile import write_bytes
 from simmer.sweep.results import (
     ResultsFile,
     header,
@@ -375,7 +376,7 @@ def _film_failures(
         def record(run: RunSpec, result: RunResult) -> None:
             cells = by_key[run.key()]
             if "video.mp4" in result.files:
-                (folder / cells["folder"] / "video.mp4").write_bytes(result.files["video.mp4"])
+                write_bytes(folder / cells["folder"] / "video.mp4", result.files["video.mp4"])
             else:
                 remarks.append(f"No video of `{cells['folder']}`: its filming {result.status}.")
             if result.outcome is not None and outcome_cells(result) != [

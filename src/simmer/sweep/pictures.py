@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from simmer.record.plots import drawable_texts
+from simmer.record.safefile import replacing
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
 
@@ -171,7 +172,8 @@ def _save(fig: Figure, target: Path) -> None:
 
     drawable_texts(fig)
     FigureCanvasAgg(fig)
-    fig.savefig(target, format="png", dpi=100)
+    with replacing(target, run_folder=False) as temp:  # never through a link at its name
+        fig.savefig(temp, format="png", dpi=100)
 
 
 def _label(spec: SweepSpec, setting: Sequence[str], sep: str = "\n") -> str:

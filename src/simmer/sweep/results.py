@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 import shutil
 import statistics
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -16,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from simmer.record.safefile import check_folder, check_target, replacing, write_bytes, write_text
 from simmer.sweep.runs import RunResult, RunSpec
 from simmer.sweep.spec import SweepSpec
 from simmer.sweep.success import (
@@ -131,11 +131,13 @@ def keep_files(folder: Path, name: str, files: Mapping[str, bytes]) -> str:
     """Write a run's files into ``folder``/runs/``name`` (replacing what a stopped sweep left
     there), its report.md written again for its place; its path relative to ``folder``."""
     target = folder / RUNS / name
+    check_folder(folder / RUNS, missing_ok=True)  # not a link: what is under it is removed
+    check_folder(target, missing_ok=True)
     if target.exists():
         shutil.rmtree(target)
     target.mkdir(parents=True)
     for file, data in files.items():
-        (target / file).write_bytes(data)
+        write_bytes(target / file, data)
     if "report.json" in files and "manifest.json" in files:
         from simmer.record.runfolder import write_report_md
 
@@ -158,6 +160,7 @@ class ResultsFile:
         if path.exists():
             self.done = self._read()
         path.parent.mkdir(parents=True, exist_ok=True)
+        check_target(path, run_folder=False)  # appended to: not through a link
         self._file: IO[str] = path.open("a", encoding="utf-8", newline="")
         self._writer = csv.writer(self._file)
         if not self.done and path.stat().st_size == 0:
@@ -200,12 +203,13 @@ class ResultsFile:
         self._file.close()
         if order is None:
             return
-        temporary = self.path.with_suffix(".csv.tmp")
-        with temporary.open("w", encoding="utf-8", newline="") as file:
+        with (
+            replacing(self.path, run_folder=False) as temporary,
+            temporary.open("w", encoding="utf-8", newline="") as file,
+        ):
             writer = csv.writer(file)
             writer.writerow(self.columns)
             writer.writerows(self.done[key] for key in order if key in self.done)
-        os.replace(temporary, self.path)
 
 
 @dataclass(frozen=True)
@@ -315,7 +319,7 @@ def write_summary(
     if remarks:
         lines += ["", "## Notes", "", *(f"- {remark}" for remark in remarks)]
     path = folder / "summary.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(path, "\n".join(lines) + "\n", run_folder=False)
     return path
 
 

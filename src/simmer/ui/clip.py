@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pygame
 
-from simmer.errors import ReplayError
+from simmer.errors import ReplayError, UnsafeOutput
 from simmer.ui.offscreen import OffscreenRenderer, even_size
 from simmer.ui.scene import default_window_size
 from simmer.ui.video import open_writer
@@ -47,10 +47,13 @@ def write_clip(
     path: str | Path,
     start: float | None = None,
     end: float | None = None,
+    *,
+    run_folder: bool = True,
 ) -> int:
     """Write the clip from ``start`` to ``end`` (:func:`clip_frames`) into ``path`` (.mp4 or
     .gif); return the number of frames. :class:`ReplayError` for times or a file that will not
-    do; what the encoder raises, if it fails."""
+    do (a link or no regular file at its name; with ``run_folder``, its folder a link: it is
+    in a folder someone else made); what the encoder raises, if it fails."""
     frames = clip_frames(recording, start, end)
     fps = recording.timeline.fps
     try:
@@ -66,7 +69,9 @@ def write_clip(
     size = even_size(default_window_size(scene))
     canvas = OffscreenRenderer(scene, pygame.Surface(size, 0, 32))
     try:
-        writer = open_writer(path, size, fps, scene)
+        writer = open_writer(path, size, fps, scene, run_folder=run_folder)
+    except UnsafeOutput as exc:
+        raise ReplayError(str(exc)) from None
     except OSError as exc:
         raise ReplayError(f"cannot write {path}: {exc.strerror or exc}") from None
     try:

@@ -37,6 +37,7 @@ import numpy as np
 import pygame
 
 from simmer.colors import Color
+from simmer.record.safefile import SafeFile
 from simmer.ui.hud import HUD_COLORS, legend
 from simmer.ui.offscreen import OffscreenRenderer, even_size
 from simmer.ui.scene import ScenePainter, default_window_size
@@ -85,18 +86,23 @@ class FrameWriter(Protocol):
 
 
 class Mp4Writer:
-    """H.264 in an MP4 file through PyAV (``size`` even).
+    """H.264 in an MP4 file through PyAV (``size`` even), written beside ``target``'s name and
+    put there when closed (:class:`~simmer.record.safefile.SafeFile`).
 
     :meth:`write` converts the surface to BT.709 ``yuv420p``; a thread of its own encodes
     and stores the frames, outside the GIL, while the next one is drawn and converted.
     """
 
-    def __init__(self, path: Path, size: tuple[int, int], fps: int) -> None:
+    def __init__(self, target: SafeFile, size: tuple[int, int], fps: int) -> None:
         import av
         from av.video.reformatter import ColorRange, VideoReformatter
 
-        path.open("wb").close()  # a file that cannot be written fails here, not in a thread
-        self.container: av.container.OutputContainer = av.open(str(path), mode="w")
+        self.target = target
+        try:
+            self.container: av.container.OutputContainer = av.open(str(target.temp), mode="w")
+        except BaseException:
+            target.discard()
+            raise
         try:
             stream = self.container.add_stream("libx264", rate=fps, options=H264_OPTIONS)
             stream.width, stream.height = size
@@ -108,6 +114,7 @@ class Mp4Writer:
             context.color_range = int(ColorRange.MPEG)
         except BaseException:
             self.container.close()
+            target.discard()
             raise
         self.stream = stream
         self.count = 0
@@ -155,12 +162,17 @@ class Mp4Writer:
         self._frames.put(None)
         self._thread.join()
         try:
-            if self.failure is None:
-                self.container.mux(self.stream.encode(None))
-        finally:
-            self.container.close()
-        if self.failure is not None:
-            raise self.failure
+            try:
+                if self.failure is None:
+                    self.container.mux(self.stream.encode(None))
+            finally:
+                self.container.close()
+            if self.failure is not None:
+                raise self.failure
+        except BaseException:
+            self.target.discard()  # not half a video at the name: what was there stays
+            raise
+        self.target.commit()
 
 
 def scene_colors(scene: HasScene) -> list[Color]:
@@ -181,8 +193,11 @@ class GifWriter:
     kept their colour left transparent, so long runs of one index compress to little.
     """
 
-    def __init__(self, path: Path, size: tuple[int, int], fps: int, colors: list[Color]) -> None:
-        self.file: BinaryIO = path.open("wb")
+    def __init__(
+        self, target: SafeFile, size: tuple[int, int], fps: int, colors: list[Color]
+    ) -> None:
+        self.target = target
+        self.file: BinaryIO = target.temp.open("wb")
         self.fps = fps
         self.colors = colors
         self.palette: Image.Image | None = None
@@ -236,17 +251,31 @@ class GifWriter:
         return palette
 
     def close(self) -> None:
-        """Write the GIF trailer."""
-        with self.file:
-            if self.palette is not None:
-                self.file.write(b";")
+        """Write the GIF trailer and put the file at its name."""
+        try:
+            with self.file:
+                if self.palette is not None:
+                    self.file.write(b";")
+        except BaseException:
+            self.target.discard()
+            raise
+        self.target.commit()
 
 
-def open_writer(path: Path, size: tuple[int, int], fps: int, scene: HasScene) -> FrameWriter:
-    """The writer for ``path``'s format."""
+def open_writer(
+    path: Path, size: tuple[int, int], fps: int, scene: HasScene, *, run_folder: bool = False
+) -> FrameWriter:
+    """The writer for ``path``'s format; :class:`~simmer.errors.UnsafeOutput` if a link or
+    anything but a regular file is at its name (or, with ``run_folder``, its folder is a link:
+    :func:`~simmer.record.safefile.check_target`)."""
+    target = SafeFile(path, run_folder=run_folder)
     if path.suffix.lower() == ".gif":
-        return GifWriter(path, size, fps, scene_colors(scene))
-    return Mp4Writer(path, size, fps)
+        try:
+            return GifWriter(target, size, fps, scene_colors(scene))
+        except BaseException:
+            target.discard()
+            raise
+    return Mp4Writer(target, size, fps)
 
 
 class VideoRecorder:

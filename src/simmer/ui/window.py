@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -28,6 +29,7 @@ import pygame
 
 from simmer.errors import SimmerError
 from simmer.geometry import Pose, point_in_polygon
+from simmer.record.safefile import replacing
 from simmer.ui.bridge import (
     SPEEDS,
     Bridge,
@@ -325,15 +327,17 @@ def new_file(folder: Path | None, suffix: str) -> Path:
     stem = time.strftime("simmer-%Y%m%d-%H%M%S")
     path = folder / f"{stem}{suffix}"
     number = 1
-    while path.exists():
+    while os.path.lexists(path):  # a link pointing nowhere is taken too
         number += 1
         path = folder / f"{stem}-{number}{suffix}"
     return path
 
 
 def save_screenshot(surface: pygame.Surface, path: Path) -> Path:
-    """Save ``surface`` as an image at ``path`` (and say so in the log); ``path``."""
-    pygame.image.save(surface, str(path))
+    """Save ``surface`` as an image at ``path`` (and say so in the log), never through a link
+    there (:class:`~simmer.errors.UnsafeOutput`); ``path``."""
+    with replacing(path, run_folder=False) as temp:
+        pygame.image.save(surface, str(temp))
     log.info("saved a screenshot: %s", path)
     return path
 
