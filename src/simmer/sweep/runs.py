@@ -575,17 +575,29 @@ class _OutputTail:
     program writes to :attr:`writing` (a pipe's end, given to the program when it starts),
     which a thread reads and drops as it comes, so a program printing without end costs
     reading, not memory or disk (one wrote 3.5 GB in 8 s); the worker adds its own text
-    (the simulator's log, a traceback, a policy's printing) with :meth:`write`."""
+    (the simulator's log, a traceback, a policy's printing) with :meth:`write`. The pipe
+    and its thread are made only for a program: a second thread slowed a policy's run by a
+    third (the interpreter then hands the lock between threads on a timer)."""
 
     def __init__(self) -> None:
-        self._reading, self.writing = os.pipe()
+        self._pipe: tuple[int, int] | None = None
+        self._thread: threading.Thread | None = None
         self._tail = bytearray()
         self._lock = threading.Lock()
-        self._thread = threading.Thread(target=self._drain, name="simmer-output", daemon=True)
-        self._thread.start()
 
-    def _drain(self) -> None:
-        while chunk := os.read(self._reading, 1 << 16):
+    @property
+    def writing(self) -> int:
+        """The pipe's end a program writes to (made on first use, with its reader)."""
+        if self._pipe is None:
+            self._pipe = os.pipe()
+            self._thread = threading.Thread(
+                target=self._drain, args=(self._pipe[0],), name="simmer-output", daemon=True
+            )
+            self._thread.start()
+        return self._pipe[1]
+
+    def _drain(self, reading: int) -> None:
+        while chunk := os.read(reading, 1 << 16):
             self._add(chunk)
 
     def _add(self, data: bytes) -> None:
@@ -605,9 +617,11 @@ class _OutputTail:
         """The tail, once the pipe has ended (every process of the run is gone), or after
         :data:`OUTPUT_GRACE` seconds (one that escaped the run's end holds it open: then the
         reader is left to finish on its own)."""
-        os.close(self.writing)  # the program's copies are its own
-        self._thread.join(OUTPUT_GRACE)
-        if not self._thread.is_alive():
-            os.close(self._reading)
+        if self._pipe is not None and self._thread is not None:
+            reading, writing = self._pipe
+            os.close(writing)  # the program's copies are its own
+            self._thread.join(OUTPUT_GRACE)
+            if not self._thread.is_alive():
+                os.close(reading)
         with self._lock:
             return bytes(self._tail).decode("utf-8", errors="replace").strip()[-STDERR_TAIL:]
