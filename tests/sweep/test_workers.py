@@ -14,7 +14,15 @@ from pathlib import Path
 import pytest
 
 from simmer.errors import SweepError
-from simmer.sweep import WARM, RunSpec, build_config, execute, local_pool
+from simmer.sweep import (
+    WARM,
+    RunSpec,
+    build_config,
+    execute,
+    local_pool,
+    run_sweep,
+    sweep_from_dict,
+)
 from simmer.sweep.engine import DaskExecutor, _LocalPool
 
 from helpers import EXAMPLES
@@ -104,7 +112,7 @@ def test_a_local_pool_knows_its_workers_by_the_pids_they_report() -> None:
 
 
 @pytest.mark.slow
-def test_a_dask_worker_with_several_threads_is_refused_in_one_line() -> None:
+def test_a_dask_worker_with_several_threads_is_refused_in_one_line(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(
         n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
@@ -116,3 +124,11 @@ def test_a_dask_worker_with_several_threads_is_refused_in_one_line() -> None:
         DaskExecutor(client, cluster)
     assert "\n" not in str(refused.value)
     assert client.status == "closed"
+    cluster = distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    )
+    spec = sweep_from_dict({"config": str(LAB1), "policy": "none:none", "seeds": 1}, tmp_path)
+    engine = lambda: DaskExecutor(distributed.Client(cluster), cluster)  # noqa: E731
+    with pytest.raises(SweepError, match="--nthreads 1"):
+        run_sweep(spec, tmp_path / "out", engine=engine)
+    assert not (tmp_path / "out" / "results.csv").exists()  # nothing to --resume

@@ -348,11 +348,16 @@ def run_sweep(
     spec.check_settings()
     runs = spec.runs()
     names = spec.folder_names(runs)
-    results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
+    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
+    try:
+        pool.executor()  # a refused cluster (DASK_WORKER_THREADS) leaves no results.csv
+        results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
+    except BaseException:
+        pool.close(cancel=True)
+        raise
     todo = [run for run in runs if run.key() not in results.done]
     success_column = results.columns.index("success")
     successes = sum(cells[success_column] == "True" for cells in results.done.values())
-    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
     with _stopped_by_signals(pool):
         try:
             with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
