@@ -106,7 +106,7 @@ def sweep_runs_per_second(kind: str, controller: str, seeds: int, workers: int) 
 
 def main() -> dict[str, float]:
     """Run the sweep benchmark and print its figures against targets."""
-    figures = {  # what the runs print goes to a file of each run's own (execute)
+    figures = {  # what the runs print goes to a pipe of each run's own (execute)
         "program_runs_per_s": runs_per_second(runs_of("program", PROGRAM, 13)),
         "policy_runs_per_s": runs_per_second(runs_of("policy", POLICY, 101)),
     }

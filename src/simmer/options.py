@@ -50,6 +50,11 @@ class RunOptions:
     answer: str | None = None
     """What the program reads at its prompt (its standard input: the text and a newline)."""
     timeout: float | None = None
+    program_folder: Path | None = None
+    """The program's working folder (None: this process's)."""
+    program_output: int | None = None
+    """A file descriptor the program's standard output and error go to (None: this
+    process's own)."""
     record: Path | None = None
     record_limit: int = MAX_RECORDING_BYTES
     video: Path | None = None

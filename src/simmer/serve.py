@@ -299,7 +299,9 @@ def _start_program(
         env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
     assert options.program is not None
     command, timeout = options.program, options.timeout
-    program = Program.start(command, env, options.answer)
+    program = Program.start(
+        command, env, options.answer, folder=options.program_folder, output=options.program_output
+    )
     echo(f"started the program: {command}")
 
     def watch() -> None:

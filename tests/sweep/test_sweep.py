@@ -526,10 +526,12 @@ def test_a_crashing_program_is_recorded_with_its_stderr(tmp_path: Path) -> None:
 
 
 def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
-    """A Dask worker runs each run in a thread of its own, where SIGALRM cannot reach."""
+    """A Dask worker runs each run in a thread of its own, where SIGALRM cannot reach: the
+    run's link ends it at its next message (no exception is sent into the thread from
+    outside, so a policy that never asks the simulator anything runs on there)."""
     shutil.copy(POLICIES, tmp_path)
     run = RunSpec(
-        str(LAB1), (), 0, "policy", "sweep_policies:spin_forever", str(tmp_path), None, 0.5
+        str(LAB1), (), 0, "policy", "sweep_policies:sleep_forever", str(tmp_path), None, 0.5
     )
     results: list[RunResult] = []
     thread = threading.Thread(target=lambda: results.append(execute(run)))

@@ -132,18 +132,30 @@ class Program:
 
     @classmethod
     def start(
-        cls, command: str | Sequence[str], env: Mapping[str, str], answer: str | None = None
+        cls,
+        command: str | Sequence[str],
+        env: Mapping[str, str],
+        answer: str | None = None,
+        *,
+        folder: Path | None = None,
+        output: int | None = None,
     ) -> Program:
         """Start ``command`` (raises ``OSError`` if it cannot be started). With ``answer``,
         its standard input is that text and a newline, then its end (``--answer``: what a
-        person would type at the program's prompt)."""
+        person would type at the program's prompt). It works in ``folder`` and writes its
+        standard output and error to the file descriptor ``output`` (None: this process's
+        folder and output), so that a sweep worker gives each run's program its own without
+        changing its own."""
         if answer is not None and len(answer) > MAX_ANSWER:
             raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
         process = subprocess.Popen(
             split_command(command),
             env=dict(env),
             start_new_session=True,
+            cwd=folder,
             stdin=None if answer is None else subprocess.PIPE,
+            stdout=output,
+            stderr=output,
         )
         if process.stdin is not None:  # fits the pipe's buffer: never waits for the program
             with process.stdin:

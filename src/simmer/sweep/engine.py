@@ -47,7 +47,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from simmer.errors import SweepStopped
+from simmer.errors import SweepError, SweepStopped
 from simmer.proctree import adopt_orphans, descendants, still_running, stop_strays
 from simmer.record.safefile import write_bytes
 from simmer.sweep.results import (
@@ -95,6 +95,9 @@ it) before it stops what is left and exits."""
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 """Signals that stop a sweep cleanly (Ctrl-C, ``kill``, closing the terminal), where they exist."""
 
+DASK_WORKER_THREADS = 1
+"""Threads a Dask worker may run tasks on: a worker process runs one run at a time."""
+
 _stopping: ctypes.c_bool | None = None
 """In a local pool's worker: the pool's flag, set when the sweep stops (:func:`_watch_sweep`)."""
 
@@ -114,22 +117,38 @@ def local_pool(workers: int | None = None) -> Engine:
     else:
         context = multiprocessing.get_context("spawn")
     stopping = context.RawValue(ctypes.c_bool, False)  # shared memory: set without a lock
-    return lambda: _LocalPool(
-        stopping,
-        max_workers=count,
-        mp_context=context,
-        initializer=_watch_sweep,
-        initargs=(os.getpid(), stopping),
-    )
+
+    def make() -> _LocalPool:
+        started = context.SimpleQueue()  # each worker's pid, put there as it starts
+        return _LocalPool(
+            stopping,
+            started,
+            max_workers=count,
+            mp_context=context,
+            initializer=_watch_sweep,
+            initargs=(os.getpid(), stopping, started),
+        )
+
+    return make
 
 
 class _LocalPool(ProcessPoolExecutor):
     """A local pool whose workers start no run once ``stopping`` is set (:meth:`_Pool.stop`):
-    a run queued before a stop would otherwise start after it, and run to its wall limit."""
+    a run queued before a stop would otherwise start after it, and run to its wall limit.
+    Its workers' pids come from the workers themselves (``started``), not from the
+    executor's private records."""
 
-    def __init__(self, stopping: ctypes.c_bool, **options: Any) -> None:
+    def __init__(self, stopping: ctypes.c_bool, started: Any, **options: Any) -> None:
         super().__init__(**options)
         self.stopping = stopping
+        self._started = started
+        self._pids: set[int] = set()
+
+    def worker_pids(self) -> set[int]:
+        """The pids of the workers started so far (each put its own on ``started``)."""
+        while not self._started.empty():
+            self._pids.add(self._started.get())
+        return set(self._pids)
 
 
 def _unless_stopping(work: Work, run: RunSpec) -> RunResult:
@@ -140,15 +159,17 @@ def _unless_stopping(work: Work, run: RunSpec) -> RunResult:
     return work(run)
 
 
-def _watch_sweep(sweep: int, stopping: ctypes.c_bool) -> None:
+def _watch_sweep(sweep: int, stopping: ctypes.c_bool, started: Any) -> None:
     """In a worker: when the ``sweep`` that started it is gone (``kill -9``, a crash), stop
     the run in progress as Ctrl-C would (its program's whole tree with it) and exit; a worker
     is otherwise left waiting for work forever (the sweep is watched by its pid, not as the
     worker's parent: a forked worker's parent is the fork server, which stays while any worker
     does). The worker also becomes the subreaper of the programs it starts
-    (:mod:`simmer.proctree`), and keeps its pool's ``stopping`` flag (:func:`_unless_stopping`)."""
+    (:mod:`simmer.proctree`), keeps its pool's ``stopping`` flag (:func:`_unless_stopping`)
+    and puts its pid on ``started`` (for :meth:`_LocalPool.worker_pids`)."""
     global _stopping  # noqa: PLW0603 (the worker's one flag, set by its initializer)
     _stopping = stopping
+    started.put(os.getpid())
     running = still_running(sweep)
     adopt_orphans()
     gone = threading.Event()
@@ -198,13 +219,27 @@ def _stopped_by_signals(pool: _Pool) -> Iterator[None]:
 
 class DaskExecutor(Executor):
     """A Dask client's executor that closes the client, and the local cluster it runs on if
-    it started one, when it shuts down. ``width``: the cluster's threads."""
+    it started one, when it shuts down. ``width``: the cluster's threads. A cluster whose
+    workers run more than :data:`DASK_WORKER_THREADS` task at once is refused
+    (:class:`~simmer.errors.SweepError`, and the client closed): the runs of one worker
+    process would share its simulations, its policies and its signal handlers."""
 
     def __init__(self, client: Any, cluster: Any = None) -> None:
         self.client = client
         self.cluster = cluster
+        threads: dict[str, int] = client.nthreads()
+        crowded = sorted(address for address, count in threads.items() if count > 1)
+        if crowded:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+            raise SweepError(
+                f"the Dask worker {crowded[0]} runs {threads[crowded[0]]} threads; a sweep "
+                f"needs workers with {DASK_WORKER_THREADS} thread each "
+                f"(DASK_WORKER_THREADS): start them with --nthreads 1"
+            )
         self._inner: Executor = client.get_executor(pure=False)  # a retried run runs again
-        self.width = max(1, sum(client.nthreads().values()))
+        self.width = max(1, sum(threads.values()))
 
     def submit(self, fn: Callable[P, T], /, *args: P.args, **kwargs: P.kwargs) -> Future[T]:
         """Run ``fn(*args, **kwargs)`` on the cluster."""
@@ -285,7 +320,7 @@ class _Pool:
         if not isinstance(current, _LocalPool):
             return  # a Dask cluster's runs end as the pool is shut down
         current.stopping.value = True
-        for pid in current._processes or {}:
+        for pid in current.worker_pids():
             with suppress(OSError):
                 os.kill(pid, signal.SIGINT)
 
@@ -314,11 +349,16 @@ def run_sweep(
     spec.check_settings()
     runs = spec.runs()
     names = spec.folder_names(runs)
-    results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
+    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
+    try:
+        pool.executor()  # a refused cluster (DASK_WORKER_THREADS) leaves no results.csv
+        results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
+    except BaseException:
+        pool.close(cancel=True)
+        raise
     todo = [run for run in runs if run.key() not in results.done]
     success_column = results.columns.index("success")
     successes = sum(cells[success_column] == "True" for cells in results.done.values())
-    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
     with _stopped_by_signals(pool):
         try:
             with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
