@@ -84,6 +84,19 @@ def test_policies_of_one_name_in_two_folders_are_each_their_own(tmp_path: Path) 
     assert "same_name" not in sys.modules  # loaded under a name of its own
 
 
+def test_a_policy_importing_a_file_beside_it_is_told_why_it_cannot(tmp_path: Path) -> None:
+    """A policy is loaded without changing ``sys.path``, so ``import helper`` of a file beside
+    it fails: the run's detail says so and what to do, not only ``No module named``."""
+    (tmp_path / "helper.py").write_text("STEP = 'u0'\n")
+    (tmp_path / "uses_helper.py").write_text(
+        "import helper\n\ndef go(robot):\n    robot.send(helper.STEP)\n"
+    )
+    result = execute(policy_run(tmp_path, "uses_helper:go"))
+    assert result.status == "error"
+    assert "uses_helper imports 'helper', a file beside it" in result.detail
+    assert "its imports must be installed packages" in result.detail
+
+
 def test_a_warm_simulation_is_one_runs_at_a_time() -> None:
     """Two runs of one configuration at once (threads of one worker) get two simulations;
     one given back is the next run's."""

@@ -489,6 +489,17 @@ def _policy_module(module_name: str, folder: str) -> ModuleType:
         sys.modules[private] = module  # as an import does (dataclasses look their module up)
         try:
             spec.loader.exec_module(module)
+        except ModuleNotFoundError as exc:
+            del sys.modules[private]
+            beside = exc.name and importlib.machinery.PathFinder.find_spec(exc.name, [folder])
+            if not beside:
+                raise
+            raise ModuleNotFoundError(
+                f"{module_name} imports {exc.name!r}, a file beside it: a policy is loaded "
+                "without changing sys.path, so its imports must be installed packages; put "
+                f"that code in {module_name}'s own file, or run it as a program",
+                name=exc.name,
+            ) from None
         except BaseException:
             del sys.modules[private]
             raise
