@@ -14,13 +14,14 @@ The table name is the device id. Motors default to ``type = "motor"``, drives to
 from __future__ import annotations
 
 import codecs
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
+from simmer.devices.registry import DeviceKinds
 from simmer.errors import ConfigIssue
 from simmer.ports import PORT_RX, PORT_TX
 from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
@@ -264,6 +265,8 @@ class SimConfig:
     origin: str = ""
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
+    kinds: DeviceKinds = field(default_factory=DeviceKinds)
+    """The device kinds this configuration uses: the process-wide ones and its plug-ins' own."""
 
     def reply_codec(self) -> ReplyCodec:
         """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""

@@ -24,7 +24,7 @@ from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import SimConfig
 from simmer.config.scenario import Scenario, draw_scenario
 from simmer.config.zones import Zones
-from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
+from simmer.devices import Axes, Device, Drive, Shape
 from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_exception
 from simmer.geometry import (
     FloatArray,
@@ -129,7 +129,7 @@ class Simulation:
         self._carried = np.empty((4, 2))
         devices: list[Device] = []
         for spec in self.config.devices:
-            kind = get_device_kind(spec.kind)
+            kind = self.config.kinds.get(spec.kind)
             if kind is None:
                 raise DeviceKindError(f"device kind {spec.kind!r} is no longer registered")
             devices.append(kind(spec.id, spec.params, self.stream(f"device:{spec.id}")))
