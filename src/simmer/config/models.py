@@ -17,6 +17,7 @@ import codecs
 from dataclasses import dataclass, field
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
@@ -186,6 +187,16 @@ class Settings(BaseModel):
     simulate_list: tuple[str, ...] = Field(
         (), description="Sensor ids read every step, so their measurement is always drawn."
     )
+
+    def run_seed(self, seed: int | None = None) -> int:
+        """The noise seed of a run: ``seed`` if given; else a fresh one each run if
+        ``rand_error``; else ``seed`` from the settings, or ``floor_seed`` if none is given.
+        The one place that decides it (the simulation and its summary both ask)."""
+        if seed is not None:
+            return seed
+        if self.rand_error:
+            return int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
+        return self.floor_seed if self.seed is None else self.seed
 
     @field_validator("bias_strength")
     @classmethod

@@ -89,12 +89,7 @@ class Simulation:
     def __init__(self, config: SimConfig, seed: int | None = None) -> None:
         self.config = config
         settings = config.settings
-        if seed is not None:
-            self.seed = seed
-        elif settings.rand_error:
-            self.seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
-        else:
-            self.seed = settings.seed if settings.seed is not None else settings.floor_seed
+        self.seed = settings.run_seed(seed)
         self.maze = Maze.from_settings(settings)
         self.zones = Zones.from_settings(settings)
         self._dt = 1.0 / settings.frame_rate
