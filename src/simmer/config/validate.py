@@ -19,7 +19,7 @@ import difflib
 import math
 import reprlib
 import traceback
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, get_args
 
@@ -98,34 +98,6 @@ def config_from_dict(
         raise ConfigError(source, issues)
     assert settings is not None
     return SimConfig(settings, tuple(devices), source, tuple(found.warnings), kinds=found.kinds)
-
-
-def with_settings(
-    config: SimConfig, updates: dict[str, Any], source: str | None = None
-) -> SimConfig:
-    """``config`` with some settings replaced (the command line's ``--port-rx`` ...), checked
-    by the same model and cross-checks as a file's settings, so that two equal ports are refused
-    before any port opens: the one route for changing a loaded configuration's settings. Every
-    problem is in a :class:`ConfigError` naming ``source`` (default: the configuration's)."""
-    source = source or config.source
-    try:
-        settings = Settings.model_validate({**config.settings.model_dump(), **updates})
-    except ValidationError as exc:
-        raise ConfigError(source, _issues_from_validation(exc, "", Settings)) from None
-    declared: dict[str, list[str]] = {
-        group: [spec.id for spec in config.devices if spec.group == group]
-        for group in DEVICE_GROUPS
-    }
-    found = _Found(bool(config.origin), kinds=config.kinds)  # warnings were said at load
-    issues = found.errors
-    issues += _check_walls(settings) or _check_sizes(settings)
-    issues += _check_references(settings, declared)
-    if not issues:
-        _check_placement(settings, found)
-        issues += check_project(settings)
-    if issues:
-        raise ConfigError(source, issues)
-    return replace(config, settings=settings)
 
 
 @dataclass
