@@ -618,14 +618,14 @@ def _run_config(
     """The run's configuration: the file, the command line's settings checked as the file's
     own are (two equal ports are refused before any port opens), then ``--start``,
     ``--block`` and ``--target``; a mistake is reported and ends the command."""
-    from simmer.config import load_config, with_settings
+    from simmer.config import load_config, with_overrides
 
     given = {key: value for key, value in overrides.items() if value is not None}
     flags = " ".join(f"--{key.replace('_', '-')} {value}" for key, value in given.items())
     try:
         loaded = load_config(config)
         if given:
-            loaded = with_settings(loaded, given, f"{loaded.source} with {flags}")
+            loaded = with_overrides(loaded, given, f"{loaded.source} with {flags}")
     except ConfigError as exc:
         _report_config_error(exc)
         raise typer.Exit(1) from None
@@ -686,14 +686,13 @@ def _say_how_it_went(served: Served, options: RunOptions, log_file: Path | None)
 def _with_scenario(config: SimConfig, **parts: str | None) -> SimConfig:
     """The configuration with --start, --block and --target in its [scenario] (so the manifest
     and a replay have them); a part that cannot be met is one plain line and exit status 1."""
-    from simmer.config import with_settings
+    from simmer.config import with_overrides
 
     given = {key: value for key, value in parts.items() if value is not None}
     if not given:
         return config
-    scenario = {**config.settings.scenario.model_dump(), **given}
     try:
-        return with_settings(config, {"scenario": scenario})
+        return with_overrides(config, {f"scenario.{key}": value for key, value in given.items()})
     except ConfigError as exc:
         for issue in exc.issues:
             part = issue.key.removeprefix("scenario.")

@@ -10,7 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
-from simmer.config import load_config, with_settings
+from simmer.config import load_config, with_overrides
 from simmer.errors import ConfigError
 
 from helpers import EXAMPLES
@@ -132,7 +132,7 @@ def test_settings_from_the_command_line_pass_the_files_checks(tmp_path: Path) ->
 def test_a_bad_override_from_python_is_a_config_error() -> None:
     config = load_config(EXAMPLES / "lab1_rover.toml")
     with pytest.raises(ConfigError, match=r"port_rx: must be 65535 or less, not 70000"):
-        with_settings(config, {"port_rx": 70000}, "the command line")
+        with_overrides(config, {"port_rx": 70000}, "the command line")
     with pytest.raises(ConfigError, match=r"port_tx: must differ from port_rx \(61201\)"):
-        with_settings(config, {"port_rx": 61201})
-    assert with_settings(config, {"port_rx": 50000}).settings.port_rx == 50000
+        with_overrides(config, {"port_rx": 61201})
+    assert with_overrides(config, {"port_rx": 50000}).settings.port_rx == 50000

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from link_support import free_port
 from simmer.cli import app
-from simmer.config import load_config, summarize, with_settings
+from simmer.config import load_config, summarize, with_overrides
 
 from helpers import EXAMPLES
 
@@ -71,9 +71,9 @@ def test_the_start_up_line_says_which_devices_are_noisy(tmp_path: Path) -> None:
     loaded = load_config(noisy)
     assert "Noise: w0 error, u0 error; repeatable, seed 5489." in summarize(loaded)
     assert "Noise: w0 error, u0 error; repeatable, seed 7." in summarize(loaded, seed=7)
-    fresh = with_settings(loaded, {"rand_error": True})
+    fresh = with_overrides(loaded, {"rand_error": True})
     assert "fresh each run (this run's: seed 12)." in summarize(fresh, seed=12)
-    drawn = with_settings(quiet, {"rand_bias": True})
+    drawn = with_overrides(quiet, {"rand_bias": True})
     assert "Noise: w0 bias, r0 bias; repeatable, seed 5489; drive biases drawn" in summarize(drawn)
 
 

@@ -233,8 +233,7 @@ def describe_noise(config: SimConfig, seed: int | None = None) -> str:
     if s.rand_error:
         draw = "fresh each run" + (f" (this run's: seed {seed})" if seed is not None else "")
     else:
-        configured = s.floor_seed if s.seed is None else s.seed
-        draw = f"repeatable, seed {configured if seed is None else seed}"
+        draw = f"repeatable, seed {s.run_seed(seed)}"
     drawn = (
         f"; drive biases drawn at start (strength {list(s.bias_strength)})" if s.rand_bias else ""
     )

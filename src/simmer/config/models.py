@@ -14,13 +14,15 @@ The table name is the device id. Motors default to ``type = "motor"``, drives to
 from __future__ import annotations
 
 import codecs
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
+from simmer.devices.registry import DeviceKinds
 from simmer.errors import ConfigIssue
 from simmer.ports import PORT_RX, PORT_TX
 from simmer.protocol import FramedCodec, PackedCodec, ReplyCodec
@@ -186,6 +188,16 @@ class Settings(BaseModel):
         (), description="Sensor ids read every step, so their measurement is always drawn."
     )
 
+    def run_seed(self, seed: int | None = None) -> int:
+        """The noise seed of a run: ``seed`` if given; else a fresh one each run if
+        ``rand_error``; else ``seed`` from the settings, or ``floor_seed`` if none is given.
+        The one place that decides it (the simulation and its summary both ask)."""
+        if seed is not None:
+            return seed
+        if self.rand_error:
+            return int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
+        return self.floor_seed if self.seed is None else self.seed
+
     @field_validator("bias_strength")
     @classmethod
     def _non_negative_strength(cls, value: tuple[float, float]) -> tuple[float, float]:
@@ -264,6 +276,8 @@ class SimConfig:
     origin: str = ""
     """For an original ``config.py``: which release it looks like and what that means for the
     replies (said at start: "looks like a SimMeR v1.0 config: replies are 8-byte doubles...")."""
+    kinds: DeviceKinds = field(default_factory=DeviceKinds)
+    """The device kinds this configuration uses: the process-wide ones and its plug-ins' own."""
 
     def reply_codec(self) -> ReplyCodec:
         """What the two-port scheme and the serial port speak, from the ``protocol`` setting."""

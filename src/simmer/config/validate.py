@@ -16,11 +16,10 @@ original ``config.py``, read into the same data), so neither imports the other's
 from __future__ import annotations
 
 import difflib
-import importlib
 import math
 import reprlib
 import traceback
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, get_args
 
@@ -38,8 +37,8 @@ from simmer.config.models import (
     Settings,
     SimConfig,
 )
-from simmer.devices import device_kinds, get_device_kind
-from simmer.devices.plugins import import_plugin_file
+from simmer.devices import DeviceKinds
+from simmer.devices.plugins import plugin_kinds
 from simmer.errors import ConfigError, ConfigIssue, DeviceKindError, ScenarioError
 from simmer.geometry import (
     FloatArray,
@@ -71,7 +70,7 @@ def config_from_dict(
     found = _Found(original)
     issues = found.errors
     groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
-    issues += _load_plugins(data.get("plugins", []), base_dir)
+    found.kinds = _load_plugins(data.get("plugins", []), base_dir, issues)
     oversize = oversize_walls(data.get("walls"))
     if oversize is not None:
         issues.append(oversize)
@@ -98,35 +97,7 @@ def config_from_dict(
     if issues:
         raise ConfigError(source, issues)
     assert settings is not None
-    return SimConfig(settings, tuple(devices), source, tuple(found.warnings))
-
-
-def with_settings(
-    config: SimConfig, updates: dict[str, Any], source: str | None = None
-) -> SimConfig:
-    """``config`` with some settings replaced (the command line's ``--port-rx`` ...), checked
-    by the same model and cross-checks as a file's settings, so that two equal ports are refused
-    before any port opens: the one route for changing a loaded configuration's settings. Every
-    problem is in a :class:`ConfigError` naming ``source`` (default: the configuration's)."""
-    source = source or config.source
-    try:
-        settings = Settings.model_validate({**config.settings.model_dump(), **updates})
-    except ValidationError as exc:
-        raise ConfigError(source, _issues_from_validation(exc, "", Settings)) from None
-    declared: dict[str, list[str]] = {
-        group: [spec.id for spec in config.devices if spec.group == group]
-        for group in DEVICE_GROUPS
-    }
-    found = _Found(original=bool(config.origin))  # its warnings were said when it was loaded
-    issues = found.errors
-    issues += _check_walls(settings) or _check_sizes(settings)
-    issues += _check_references(settings, declared)
-    if not issues:
-        _check_placement(settings, found)
-        issues += check_project(settings)
-    if issues:
-        raise ConfigError(source, issues)
-    return replace(config, settings=settings)
+    return SimConfig(settings, tuple(devices), source, tuple(found.warnings), kinds=found.kinds)
 
 
 @dataclass
@@ -136,6 +107,8 @@ class _Found:
     original: bool
     errors: list[ConfigIssue] = field(default_factory=list)
     warnings: list[ConfigIssue] = field(default_factory=list)
+    kinds: DeviceKinds = field(default_factory=DeviceKinds)
+    """The kinds the configuration may use (its plug-ins' as well, once loaded)."""
 
     def strict(self, key: str, message: str, warning: str | None = None) -> None:
         """Something only the native format refuses: an error, or for an original config.py a
@@ -149,40 +122,51 @@ class _Found:
 # ----------------------------------------------------------------------------- plugins
 
 
-def _load_plugins(plugins: Any, base_dir: Path) -> list[ConfigIssue]:
-    """Import each plug-in (a .py file relative to the config, or a module name)."""
+def _load_plugins(plugins: Any, base_dir: Path, issues: list[ConfigIssue]) -> DeviceKinds:
+    """Load each plug-in (a .py file relative to the configuration, or an installed module's
+    name) for this configuration alone, adding what goes wrong to ``issues``; the kinds the
+    configuration may use."""
     if not isinstance(plugins, list | tuple):
-        return []  # the Settings model reports the wrong type
-    issues = []
+        return DeviceKinds()  # the Settings model reports the wrong type
+    loaded: list[str] = []
+    registered_by: dict[str, tuple[str, str]] = {}  # a plug-in kind -> (plug-in, its entry)
     for i, entry in enumerate(plugins):
         if not isinstance(entry, str):
             continue
+        key = f"plugins[{i}]"
         try:
-            _import_plugin(entry, base_dir)
+            name = _plugin_name(entry, base_dir)
+            kinds = plugin_kinds(name)
         except FileNotFoundError:
             issues.append(
                 ConfigIssue(
-                    f"plugins[{i}]",
+                    key,
                     f"no file {entry!r} next to the configuration ({base_dir}); "
                     "give a path relative to the configuration file",
                 )
             )
+            continue
         except (Exception, SystemExit) as exc:  # sys.exit() in a plug-in must not end `check`
-            issues.append(ConfigIssue(f"plugins[{i}]", _describe_plugin_error(entry, exc)))
-    return issues
+            issues.append(ConfigIssue(key, _describe_plugin_error(entry, exc)))
+            continue
+        loaded.append(name)
+        for kind in kinds:
+            first, first_entry = registered_by.setdefault(kind, (name, entry))
+            if first != name:
+                message = f"{entry} registers device kind {kind!r}, as {first_entry} does"
+                issues.append(ConfigIssue(key, message + "; rename one of the two"))
+    return DeviceKinds(tuple(dict.fromkeys(loaded)))
 
 
-def _import_plugin(entry: str, base_dir: Path) -> None:
-    """Import one plug-in: a file (relative to the configuration) under a module name that is
-    the same in every process (so what it defines pickles: :mod:`simmer.devices.plugins`), or
-    an installed module by its name."""
+def _plugin_name(entry: str, base_dir: Path) -> str:
+    """How :func:`plugin_kinds` knows a plug-in: a file (relative to the configuration) by its
+    absolute path, an installed module by its name."""
     if entry.endswith(".py") or "/" in entry or "\\" in entry:
         path = (base_dir / entry).resolve()
         if not path.is_file():
             raise FileNotFoundError(path)
-        import_plugin_file(path)
-    else:
-        importlib.import_module(entry)
+        return str(path)
+    return entry
 
 
 def _describe_plugin_error(entry: str, exc: Exception | SystemExit) -> str:
@@ -262,7 +246,7 @@ def _rehome(
     built-in device listed in the wrong dictionary (a motor among the sensors; the original
     answered it by id all the same), its kind's table, or None if that table has the id too."""
     name = raw.get("type", DEFAULT_KIND.get(group))
-    kind = get_device_kind(name) if isinstance(name, str) else None
+    kind = found.kinds.get(name) if isinstance(name, str) else None
     if kind is None or kind.category == CATEGORY_OF_GROUP[group]:
         return group
     home = GROUP_OF_CATEGORY[kind.category]
@@ -320,19 +304,19 @@ def _validate_device(
         issues.append(
             ConfigIssue(
                 f"{key}.type",
-                "missing: say what the sensor is, one of " + _kind_list("sensor"),
+                "missing: say what the sensor is, one of " + _kind_list(found.kinds, "sensor"),
             )
         )
         return None
     named = isinstance(kind_name, str)
-    kind = get_device_kind(kind_name) if named else None
+    kind = found.kinds.get(kind_name) if named else None
     if kind is None:
-        hint = _did_you_mean(kind_name, list(device_kinds())) if named else ""
+        hint = _did_you_mean(kind_name, list(found.kinds.all())) if named else ""
         issues.append(
             ConfigIssue(
                 f"{key}.type",
                 f"unknown device kind {_shown(kind_name)}{hint}; known kinds: "
-                + _kind_list(CATEGORY_OF_GROUP[group]),
+                + _kind_list(found.kinds, CATEGORY_OF_GROUP[group]),
             )
         )
         return None
@@ -372,8 +356,8 @@ def _validate_device(
     return DeviceSpec(device_id, group, str(kind_name), params)
 
 
-def _kind_list(category: str) -> str:
-    names = sorted(name for name, cls in device_kinds().items() if cls.category == category)
+def _kind_list(kinds: DeviceKinds, category: str) -> str:
+    names = sorted(name for name, cls in kinds.all().items() if cls.category == category)
     return ", ".join(names)
 
 

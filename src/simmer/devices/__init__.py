@@ -10,8 +10,8 @@ from simmer.devices.base import (
 )
 from simmer.devices.drive import Axes, Drive, DriveParams, Motion
 from simmer.devices.motor import Motor, MotorParams
-from simmer.devices.plugins import install_finder
 from simmer.devices.registry import (
+    DeviceKinds,
     check_device_kind,
     device_kinds,
     get_device_kind,
@@ -28,15 +28,13 @@ from simmer.devices.sensors import (
     UltrasonicParams,
 )
 
-# a pickled plug-in class names a simmer_plugin_... module, which the finder imports again
-install_finder()
-
 __all__ = [
     "Axes",
     "Circle",
     "Compass",
     "CompassParams",
     "Device",
+    "DeviceKinds",
     "DeviceParams",
     "Drive",
     "DriveParams",

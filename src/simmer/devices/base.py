@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, Literal, Protocol
+from typing import Annotated, Any, ClassVar, Literal, Protocol, SupportsIndex
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from pydantic_core import PydanticCustomError
 
+from simmer.devices.plugins import by_plugin_file
 from simmer.geometry import BoolArray, FloatArray, Pose, Vec2, rectangle
 
 Category = Literal["motor", "drive", "sensor"]
@@ -73,6 +74,11 @@ class DeviceParams(BaseModel):
     """
 
     model_config = SETTINGS_CONFIG
+
+    def __reduce_ex__(self, protocol: SupportsIndex) -> str | tuple[Any, ...]:
+        """Pickle as usual, but an instance of a plug-in's class names the plug-in's file, so
+        another process loads it (:mod:`simmer.devices.plugins`)."""
+        return by_plugin_file(type(self), super().__reduce_ex__(protocol))
 
     type: str = Field(description="Registered device kind, e.g. 'ultrasonic'.")
     position: Mount = Field(
@@ -228,6 +234,11 @@ class Device:
             if params.outline is not None
             else self.default_outline.copy()
         )
+
+    def __reduce_ex__(self, protocol: SupportsIndex) -> str | tuple[Any, ...]:
+        """Pickle as usual, but an instance of a plug-in's class names the plug-in's file, so
+        another process loads it (:mod:`simmer.devices.plugins`)."""
+        return by_plugin_file(type(self), super().__reduce_ex__(protocol))
 
     # -- the interface -------------------------------------------------------------------
 

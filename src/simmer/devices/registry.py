@@ -5,6 +5,11 @@ their own kinds with :func:`register_device_kind`, from a plug-in file named in 
 configuration (``plugins = ["bumper.py"]``) or from an installed package's ``simmer.devices``
 entry point; nothing in SimMeR needs editing.
 
+A configuration's plug-ins register their kinds for that configuration alone: while a plug-in
+loads, :func:`register_device_kind` puts its kinds in the plug-in's own table
+(:mod:`simmer.devices.plugins`), and the configuration looks kinds up through a
+:class:`DeviceKinds`: the process-wide kinds plus its plug-ins' kinds.
+
 A kind may be registered as a ``"package.module:Class"`` string (an entry point's form), imported
 on first use. The built-in kinds are registered so: the registry imports none of them itself,
 so a module defining a kind (:mod:`simmer.compat.template`) may import :mod:`simmer.devices`
@@ -16,12 +21,14 @@ from __future__ import annotations
 import importlib
 import inspect
 from collections.abc import Callable
+from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import TypeVar, cast, overload
 
 import numpy as np
 
 from simmer.devices.base import Device, DeviceParams
+from simmer.devices.plugins import COLLECTING, Kinds, plugin_kinds
 from simmer.errors import DeviceKindError
 
 BUILTIN_KINDS = {
@@ -37,7 +44,7 @@ BUILTIN_KINDS = {
 }
 """SimMeR's own kinds: name -> ``"module:Class"``."""
 
-_KINDS: dict[str, type[Device] | str] = dict(BUILTIN_KINDS)
+_KINDS: Kinds = dict(BUILTIN_KINDS)
 """Every registered kind: its class, or its ``"module:Class"`` string until first used."""
 _ENTRY_POINTS_LOADED = False
 ENTRY_POINT_GROUP = "simmer.devices"
@@ -66,28 +73,32 @@ def register_device_kind(
 
     ``cls`` may be a ``"package.module:Class"`` string, imported when the kind is first used.
     A second registration under one name is an error unless it is the same class (a module
-    imported twice) or ``replace=True``.
+    imported twice) or ``replace=True``. Called while a configuration's plug-in loads, it
+    registers the kind for that configuration only.
     """
+    table = COLLECTING.get()
+    kinds = _KINDS if table is None else table
 
     def _register(kind_cls: D) -> D:
         check_device_kind(kind_cls)
-        _claim(name, kind_cls, replace)
+        _claim(kinds, name, kind_cls, replace)
         kind_cls.kind = name
-        _KINDS[name] = kind_cls
+        kinds[name] = kind_cls
         return kind_cls
 
     if cls is None:
         return _register
     if isinstance(cls, str):
-        _claim(name, cls, replace)
-        _KINDS[name] = cls
+        _claim(kinds, name, cls, replace)
+        kinds[name] = cls
         return cls
     return _register(cls)
 
 
-def _claim(name: str, new: type[Device] | str, replace: bool) -> None:
-    """Refuse ``new`` under ``name`` if another class holds the name (unless ``replace``)."""
-    existing = _KINDS.get(name)
+def _claim(kinds: Kinds, name: str, new: type[Device] | str, replace: bool) -> None:
+    """Refuse ``new`` under ``name`` if another class holds the name (unless ``replace``), in
+    ``kinds`` or, for a plug-in's kind, process-wide."""
+    existing = kinds.get(name, _KINDS.get(name))
     if existing is not None and not replace and _target(existing) != _target(new):
         raise DeviceKindError(
             f"device kind {name!r} is already registered by {_target(existing)}; "
@@ -100,9 +111,11 @@ def _target(cls: type[Device] | str) -> str:
     return cls if isinstance(cls, str) else f"{cls.__module__}:{cls.__qualname__}"
 
 
-def _resolve(name: str) -> type[Device] | None:
-    """The class registered as ``name``, imported and checked now if registered as a string."""
-    entry = _KINDS.get(name)
+def _resolve(name: str, kinds: Kinds | None = None) -> type[Device] | None:
+    """The class registered as ``name`` in ``kinds`` (default: process-wide), imported and
+    checked now if registered as a string."""
+    kinds = _KINDS if kinds is None else kinds
+    entry = kinds.get(name)
     if not isinstance(entry, str):
         return entry
     module_name, _, qualname = entry.partition(":")
@@ -115,7 +128,7 @@ def _resolve(name: str) -> type[Device] | None:
     check_device_kind(found)  # raises unless it is a Device subclass
     kind_cls = cast(type[Device], found)
     kind_cls.kind = name
-    _KINDS[name] = kind_cls
+    kinds[name] = kind_cls
     return kind_cls
 
 
@@ -162,3 +175,32 @@ def _load_entry_points() -> None:
     _ENTRY_POINTS_LOADED = True
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         register_device_kind(ep.name, f"{ep.module}:{ep.attr}")
+
+
+@dataclass(frozen=True)
+class DeviceKinds:
+    """The kinds one configuration can use: the process-wide kinds and its plug-ins' own.
+
+    ``plugins`` are the configuration's plug-ins as loaded (a file's absolute path or an
+    installed module's name); each is loaded once per process, on first use, so a pickled
+    configuration finds its kinds in another process too.
+    """
+
+    plugins: tuple[str, ...] = ()
+
+    def _own(self) -> Kinds:
+        own: Kinds = {}
+        for entry in self.plugins:
+            own |= plugin_kinds(entry)
+        return own
+
+    def get(self, name: str) -> type[Device] | None:
+        """The kind called ``name``, or None."""
+        own = self._own()
+        return _resolve(name, own) if name in own else get_device_kind(name)
+
+    def all(self) -> dict[str, type[Device]]:
+        """Every kind by name."""
+        own = self._own()
+        found = device_kinds() | {name: _resolve(name, own) for name in list(own)}
+        return {name: cls for name, cls in found.items() if cls is not None}

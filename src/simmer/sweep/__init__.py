@@ -9,6 +9,7 @@ simulation kept warm in the worker, and writes ``results.csv``, the kept runs' f
 kinds of failure are in :mod:`simmer.sweep.success`.
 """
 
+from simmer.config.overrides import apply_overrides
 from simmer.sweep.engine import DaskExecutor, SweepResult, dask_engine, local_pool, run_sweep
 from simmer.sweep.results import wilson_interval
 from simmer.sweep.runs import (
@@ -16,7 +17,6 @@ from simmer.sweep.runs import (
     RunResult,
     RunSpec,
     WarmSimulations,
-    apply_overrides,
     build_config,
     execute,
 )

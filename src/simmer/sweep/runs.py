@@ -39,6 +39,7 @@ from types import FrameType, ModuleType
 from typing import TYPE_CHECKING, Any, Literal
 
 from simmer.config.models import SimConfig
+from simmer.config.overrides import apply_overrides
 from simmer.errors import LimitReached, WallLimitReached
 from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
 
@@ -131,36 +132,6 @@ class RunResult:
     files: dict[str, bytes] = field(default_factory=dict, repr=False)
     """A kept run's folder (manifest.json, events.jsonl, trace.csv, report.json, report.md),
     for a failure with first.png and last.png; a filmed run's video.mp4."""
-
-
-def apply_overrides(data: dict[str, Any], overrides: tuple[tuple[str, Any], ...]) -> None:
-    """Set each dotted key (``drives.w0.error.x``) in configuration data, making the tables
-    on the way that are missing (a key the file left at its default). A ``*`` stands for each
-    table at its level (``sensors.*.error``: every sensor's error). Raises ``KeyError`` if the
-    way runs through something that is not a table, or a ``*`` finds no table."""
-    for dotted, value in overrides:
-        _set(data, dotted.split("."), value, dotted, ())
-
-
-def _set(
-    node: dict[str, Any], names: list[str], value: Any, dotted: str, way: tuple[str, ...]
-) -> None:
-    name, *rest = names
-    if name == "*":
-        tables = [key for key, child in node.items() if isinstance(child, dict)]
-        if not rest or not tables:
-            where = ".".join(way) or "the top level"
-            raise KeyError(f"{dotted}: * stands for each table in {where}, and there is none")
-        for key in tables:
-            _set(node[key], rest, value, dotted, (*way, key))
-        return
-    if not rest:
-        node[name] = copy.deepcopy(value)
-        return
-    child = node.setdefault(name, {})
-    if not isinstance(child, dict):
-        raise KeyError(f"{dotted}: {'.'.join((*way, name))} is a value, not a table")
-    _set(child, rest, value, dotted, (*way, name))
 
 
 @lru_cache(maxsize=8)

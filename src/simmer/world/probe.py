@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from simmer.config.models import DeviceSpec, SimConfig
-from simmer.devices import get_device_kind
 from simmer.errors import CommandError, ConfigIssue, describe_exception
 from simmer.world.simulation import Simulation
 
@@ -77,7 +76,7 @@ def _construction_issues(config: SimConfig, base: Path | None) -> list[ConfigIss
     """Build each device on its own, to say which one's constructor raises."""
     issues = []
     for spec in config.devices:
-        kind = get_device_kind(spec.kind)
+        kind = config.kinds.get(spec.kind)
         if kind is None:
             continue  # the simulation's own error says so
         try:

@@ -24,7 +24,7 @@ from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import SimConfig
 from simmer.config.scenario import Scenario, draw_scenario
 from simmer.config.zones import Zones
-from simmer.devices import Axes, Device, Drive, Shape, get_device_kind
+from simmer.devices import Axes, Device, Drive, Shape
 from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_exception
 from simmer.geometry import (
     FloatArray,
@@ -89,12 +89,7 @@ class Simulation:
     def __init__(self, config: SimConfig, seed: int | None = None) -> None:
         self.config = config
         settings = config.settings
-        if seed is not None:
-            self.seed = seed
-        elif settings.rand_error:
-            self.seed = int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
-        else:
-            self.seed = settings.seed if settings.seed is not None else settings.floor_seed
+        self.seed = settings.run_seed(seed)
         self.maze = Maze.from_settings(settings)
         self.zones = Zones.from_settings(settings)
         self._dt = 1.0 / settings.frame_rate
@@ -129,7 +124,7 @@ class Simulation:
         self._carried = np.empty((4, 2))
         devices: list[Device] = []
         for spec in self.config.devices:
-            kind = get_device_kind(spec.kind)
+            kind = self.config.kinds.get(spec.kind)
             if kind is None:
                 raise DeviceKindError(f"device kind {spec.kind!r} is no longer registered")
             devices.append(kind(spec.id, spec.params, self.stream(f"device:{spec.id}")))
