@@ -55,7 +55,7 @@ from simmer.protocol import (
     frame_text,
     printable,
 )
-from simmer.transport.bus import CommandBus, Reply, Request
+from simmer.transport.bus import ByteCounter, CommandBus, Reply, Request
 
 log = logging.getLogger("simmer.transport")
 
@@ -672,8 +672,12 @@ class StreamServer(_Server):
         timeout: float = 300.0,
         idle_timeout: float = 3600.0,
         lenient: bool = False,
+        clock: ByteCounter | None = None,
     ) -> None:
         super().__init__(bus, host, [port], timeout, idle_timeout)
+        self.clock = clock
+        """Where the bytes of ``?`` lines are counted (None: nowhere, a server off any run's
+        clock)."""
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -779,7 +783,8 @@ class _StreamConnection(_Connection):
             self.searched = 0
             self.messages += 1
             if line in (EXPLAIN, EXPLAIN + b"\r"):
-                self.server.bus.took(end + 1)
+                if self.stream.clock is not None:
+                    self.stream.clock.took(end + 1)
                 self.explain_later()
             elif line.startswith(META_PREFIX):
                 self.submit(decode_meta(line, end + 1), now)
