@@ -10,7 +10,7 @@ import pytest
 from link_support import read_frame, serving, stream
 from simmer.clock import Clock, LockstepClock, RealTimeClock, make_clock
 from simmer.lockstep import FREE_TIME_READS
-from simmer.protocol import Decoded, parse_clock
+from simmer.protocol import ClockText, parse_clock
 from simmer.runner import Runner
 from simmer.transport.bus import Request
 from simmer.world import Simulation
@@ -20,7 +20,7 @@ from helpers import wait_for
 
 def _ask(clock: Clock, text: str) -> Request:
     """Hand ``clock`` the clock message ``text``; the request its answer goes into."""
-    request = Request(Decoded(text, 1, clock=True), "test")
+    request = Request(ClockText(text), "test")
     clock.start(request, parse_clock(text))
     return request
 

@@ -28,7 +28,16 @@ from dataclasses import dataclass
 
 from simmer.clock import EPSILON, Clock, LockstepClock, make_clock
 from simmer.localize.messages import Localization
-from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, printable
+from simmer.protocol import (
+    CLOCK_PREFIX,
+    ClockMessage,
+    ClockText,
+    CommandText,
+    LocalizationText,
+    Refused,
+    parse_clock,
+    printable,
+)
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
@@ -201,25 +210,25 @@ class Runner:
         """Execute one request on the simulation and fulfil its future. Why its NaN replies are
         NaN is logged (bounded, see :data:`MAX_LOGGED`) and kept in ``request.reasons``. A
         clock message is answered later, when simulated time has got where it asks."""
-        decoded = request.decoded
-        if decoded.clock and decoded.text is not None:
-            self._clock_message(request, decoded.text)
-            return []
-        if decoded.meta and decoded.text is not None:
-            return self._localization(request, decoded.text)
-        self.clock.message(decoded.size)
-        if decoded.text is None:
-            error = printable(str(decoded.error))
-            client = printable(request.client)
-            self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
-            request.reasons.append(error)
-            replies = [math.nan] * decoded.count
-        else:
-            commands = decoded.commands or self.sim.parse(decoded.text)
-            answers = self.sim.answer(commands, decoded.text, request.client)
-            replies = [answer.value for answer in answers]
-            if records := [(a.level, a.why) for a in answers if a.why is not None]:
-                self._report(printable(request.client), records, request.reasons)
+        match request.decoded:
+            case ClockText(text=text):
+                self._clock_message(request, text)
+                return []
+            case LocalizationText(text=text):
+                return self._localization(request, text)
+            case CommandText(text=text, commands=commands, size=size):
+                self.clock.message(size)
+                answers = self.sim.answer(commands or self.sim.parse(text), text, request.client)
+                replies = [answer.value for answer in answers]
+                if records := [(a.level, a.why) for a in answers if a.why is not None]:
+                    self._report(printable(request.client), records, request.reasons)
+            case Refused(error=error, count=count, size=size):
+                self.clock.message(size)
+                error = printable(error)
+                client = printable(request.client)
+                self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
+                request.reasons.append(error)
+                replies = [math.nan] * count
         request.future.set_result(replies)
         return replies
 
@@ -424,8 +433,10 @@ class LocalLink:
 
     def exchange(self, message: str) -> list[float]:
         """Execute one message (or clock message) and let the time it costs pass."""
-        clock = message.encode("utf-8").startswith(CLOCK_PREFIX)
-        request = Request(Decoded(message, message.count(",") + 1, clock=clock), "local")
+        if message.encode("utf-8").startswith(CLOCK_PREFIX):
+            request = Request(ClockText(message), "local")
+        else:
+            request = Request(CommandText(message, message.count(",") + 1), "local")
         self.runner.handle(request)
         self._clock.catch_up()
         return request.future.result()
@@ -433,7 +444,7 @@ class LocalLink:
     def ask(self, message: str) -> tuple[list[float], str | None]:
         """A localization message (``%maze``, ``%show``, ``%pose``): its values, or its text;
         it costs no simulated time."""
-        request = Request(Decoded(message, 1, meta=True), "local")
+        request = Request(LocalizationText(message), "local")
         self.runner.handle(request)
         return request.future.result(), (request.answer[0] if request.answer else None)
 

@@ -71,3 +71,47 @@ def test_only_the_clock_counts_the_bytes_taken() -> None:
         if path.name != "clock.py" and (names := _counters(path))
     }
     assert not found, f"the clock (simmer/clock.py) keeps the byte count, not: {found}"
+
+
+KINDS = {"CommandText", "ClockText", "LocalizationText", "Refused"}
+"""The kinds of a decoded message (``simmer.protocol.Decoded``)."""
+
+
+def _kind_dispatch(path: Path) -> tuple[int, list[str]]:
+    """How many ``match`` statements in ``path`` name a kind of message in their cases, and
+    the kinds named anywhere else as a test (``isinstance``) or the flags the kinds replaced
+    (``decoded.clock``, ``decoded.meta``)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    matches = 0
+    elsewhere = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Match):
+            named = {
+                sub.cls.id
+                for case in node.cases
+                for sub in ast.walk(case.pattern)
+                if isinstance(sub, ast.MatchClass) and isinstance(sub.cls, ast.Name)
+            }
+            matches += bool(named & KINDS)
+        elif _tests_a_kind(node):
+            elsewhere.append(f"{node.lineno}: {ast.unparse(node)}")
+    return matches, elsewhere
+
+
+def _tests_a_kind(node: ast.AST) -> bool:
+    """Whether ``node`` is an ``isinstance`` against a kind, or reads a replaced flag."""
+    if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance":
+        return any(isinstance(n, ast.Name) and n.id in KINDS for n in ast.walk(node))
+    return (
+        isinstance(node, ast.Attribute)
+        and node.attr in {"clock", "meta"}
+        and ast.unparse(node.value).endswith("decoded")
+    )
+
+
+def test_each_dispatcher_matches_the_kinds_of_message_once() -> None:
+    """The runner and the TCP transport each decide what to do with a message in one
+    ``match`` on its kind, not on flag fields."""
+    for name in ("runner.py", "transport/tcp.py"):
+        matches, elsewhere = _kind_dispatch(SRC / name)
+        assert (matches, elsewhere) == (1, []), name

@@ -33,7 +33,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from simmer.errors import BusClosed
-from simmer.protocol import Decoded
+from simmer.protocol import CommandText, Decoded
 
 if TYPE_CHECKING:
     from _typeshed import FileDescriptorLike
@@ -217,7 +217,7 @@ class CommandBus:
         ``now``: a watched socket's callback asks for it to be answered before this returns,
         which the loop does if it answers that way (:meth:`answer_with`) and nothing is
         queued ahead of it; otherwise it is queued."""
-        decoded = Decoded(message) if isinstance(message, str) else message
+        decoded = CommandText(message) if isinstance(message, str) else message
         request = Request(decoded, client)
         if (
             now

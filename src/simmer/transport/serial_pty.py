@@ -25,7 +25,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from simmer.errors import BusClosed, SimmerError
-from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
+from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, Refused, ReplyCodec
 from simmer.transport.bus import ByteCounter, CommandBus
 
 log = logging.getLogger("simmer.transport")
@@ -170,7 +170,7 @@ class SerialServer:
         the thread."""
         try:
             decoded = replace(self.codec.decode(data), size=size)
-            if decoded.text is None and decoded.count == 0:
+            if isinstance(decoded, Refused) and decoded.count == 0:  # nothing to send back
                 log.warning("%s: %s", self.client, decoded.error)
                 self._set_aside(size)
                 return

@@ -44,8 +44,12 @@ from simmer.protocol import (
     MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
     META_PREFIX,
+    ClockText,
+    CommandText,
     Decoded,
+    LocalizationText,
     PackedCodec,
+    Refused,
     Replies,
     ReplyCodec,
     decode_message,
@@ -775,7 +779,7 @@ class _StreamConnection(_Connection):
                 self.searched = len(inbox)
                 if len(inbox) > MAX_MESSAGE_BYTES:
                     reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)), now)
+                    self.submit(Refused(reason, over_limit=True, size=len(inbox)), now)
                     inbox.clear()
                 break
             line = bytes(inbox[:end])
@@ -862,7 +866,11 @@ class _StreamConnection(_Connection):
         if request.answer:  # a localization message's text (``%maze``)
             self.send(frame_document(request.answer[0]))
             return
-        width = 8 if request.decoded.clock else self.stream.width  # a time needs float64
+        match request.decoded:
+            case ClockText() | Refused(clock=True):  # a time needs float64
+                width = 8
+            case CommandText() | LocalizationText() | Refused():
+                width = self.stream.width
         self.send(frame_replies(values, width))
 
     def explain_later(self) -> None:
