@@ -42,7 +42,7 @@ def serving(
     runner = Runner(sim, speed=speed)
     stop = threading.Event()
     options = RunOptions.free_ports(serial=serial, serial_link=serial_link)
-    link = Transports(runner.bus, sim.config, options)
+    link = Transports(runner.bus, sim.config, options, clock=runner.clock)
     if link.serial is not None and silence is not None:
         link.serial.silence = silence
     thread = threading.Thread(target=runner.run, kwargs={"stop_event": stop})

@@ -15,7 +15,7 @@ import pytest
 from link_support import closed_by_server, read_frame, serving, stream, two_port_send
 from simmer.config import load_config
 from simmer.errors import BusClosed, WrongThread
-from simmer.protocol import MAX_COMMANDS, Decoded
+from simmer.protocol import MAX_COMMANDS, Refused
 from simmer.runner import LOG_LINES_PER_SECOND, Runner, _LogBudget
 from simmer.transport import CommandBus
 from simmer.transport.bus import Reply, Request
@@ -42,7 +42,7 @@ def test_serve_answers_queued_messages_in_order(runner: Runner) -> None:
 
 
 def test_undecodable_message_gets_nan_per_command(runner: Runner) -> None:
-    future = runner.bus.submit(Decoded(None, 3, "not utf-8"), "c")
+    future = runner.bus.submit(Refused("not utf-8", 3), "c")
     runner.serve()
     assert all(math.isnan(v) for v in future.result())
     assert len(future.result()) == 3
@@ -125,7 +125,7 @@ def test_client_text_is_escaped_in_the_log(
     with caplog.at_level(logging.DEBUG):
         for message in messages:
             sim.command(message)
-        Runner(sim).handle(Request(Decoded(None, 1, f"not text: {CONTROL}"), "client"))
+        Runner(sim).handle(Request(Refused(f"not text: {CONTROL}"), "client"))
     logged = [record.getMessage() for record in caplog.records]
     assert len(logged) >= len(messages)
     for line in logged:

@@ -184,51 +184,83 @@ MAX_TEXT_BYTES = 4096
 """Longest text frame: a few dozen reasons."""
 
 
+# A message as received is one of four kinds (:data:`Decoded`), each a frozen dataclass: the
+# loop and the transports match on the kind once, instead of on flag fields. Every kind has
+# ``text`` (None: undecodable), ``count`` (how many replies it gets: one per comma-separated
+# command, so a client receives exactly one value per command it sent), ``size`` (bytes of the
+# transport's stream it used, its line ending too: what the clock counts as taken once it is
+# answered, see :func:`parse_clock`) and ``over_limit``.
+
+
 @dataclass(frozen=True)
-class Decoded:
-    """A message as received: its text, or (``text is None``) why it cannot be executed.
+class CommandText:
+    """Robot commands: ``text``, and its commands parsed once where it was decoded (empty:
+    not parsed yet)."""
 
-    ``count`` is how many replies it gets: one per comma-separated command, so a client
-    receives exactly one value per command it sent; a message over a limit gets one NaN.
-    """
-
-    text: str | None
+    text: str
     count: int = 1
-    error: str | None = None
+    commands: tuple[Command, ...] = ()
+    size: int = 0
+    over_limit: ClassVar[bool] = False
+
+
+@dataclass(frozen=True)
+class ClockText:
+    """A clock message (persistent protocol, ``!...``; see :func:`parse_clock`): one reply."""
+
+    text: str
+    size: int = 0
+    count: ClassVar[int] = 1
+    over_limit: ClassVar[bool] = False
+
+
+@dataclass(frozen=True)
+class LocalizationText:
+    """A localization message (persistent protocol, ``%...``; see :func:`decode_meta`)."""
+
+    text: str
+    size: int = 0
+    count: ClassVar[int] = 1
+    over_limit: ClassVar[bool] = False
+
+
+@dataclass(frozen=True)
+class Refused:
+    """A message that cannot be executed, and why: ``count`` NaN replies (a message over a
+    limit gets one; a framed one with no frame, none: nothing is sent back)."""
+
+    error: str
+    count: int = 1
     ids: tuple[str, ...] = ()
     """Framed text only: the ids of an undecodable message's commands, for its NaN reply."""
     over_limit: bool = False
     """Over :data:`MAX_MESSAGE_BYTES` or :data:`MAX_COMMANDS`: nothing in it runs, and the
     persistent protocol closes the connection after the reply (its framing cannot be trusted)."""
     clock: bool = False
-    """A clock message (persistent protocol, ``!...``; see :func:`parse_clock`)."""
+    """It came as a clock message: its NaN goes out as a time does (float64)."""
     size: int = 0
-    """Bytes of the transport's stream this message used (its line ending too): what the
-    lockstep clock counts as taken once the message is answered (see :func:`parse_clock`)."""
-    meta: bool = False
-    """A localization message (persistent protocol, ``%...``; see :func:`decode_meta`)."""
-    commands: tuple[Command, ...] = ()
-    """The commands of ``text``, parsed once where the message was decoded (empty: not parsed,
-    a clock or localization message, or no text)."""
+    text: ClassVar[None] = None
 
 
-def over_limit(size: int, commands: int, *, framed: bool = False) -> Decoded | None:
+Decoded = CommandText | ClockText | LocalizationText | Refused
+"""A message as received: one of the four kinds (see above)."""
+
+
+def over_limit(size: int, commands: int, *, framed: bool = False) -> Refused | None:
     """What a message of ``size`` bytes and ``commands`` commands decodes to if it breaks a
     limit (one NaN; ``framed``: nothing, as for a v1.2 message with no frame), else None."""
     count = 0 if framed else 1
     if size > MAX_MESSAGE_BYTES:
-        return Decoded(
-            None,
-            count,
+        return Refused(
             f"message of {size} bytes is over {MAX_MESSAGE_BYTES}",
+            count,
             over_limit=True,
         )
     if commands > MAX_COMMANDS:
-        return Decoded(
-            None,
-            count,
+        return Refused(
             f"message of {commands} commands is over the limit of {MAX_COMMANDS}; send fewer "
             "at a time",
+            count,
             over_limit=True,
         )
     return None
@@ -249,18 +281,19 @@ def decode_message(
 ) -> Decoded:
     """Decode the bytes of one message (line ending already removed, or not) and parse its
     commands (``lenient``: the originals' way, :func:`parse_command`); the limits are checked
-    before anything else is done with it. ``size`` and ``clock`` go into the result
-    (:attr:`Decoded.size`, :attr:`Decoded.clock`; a clock message is not parsed here)."""
+    before anything else is done with it. ``size`` goes into the result; ``clock``: it is a
+    clock message (:class:`ClockText`, not parsed here)."""
     count = data.count(b",") + 1
     if (refused := over_limit(len(data), count)) is not None:
         return replace(refused, size=size)
     try:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
-        return Decoded(None, count, _not_text(exc, encoding), size=size, clock=clock)
+        return Refused(_not_text(exc, encoding), count, size=size, clock=clock)
     text = text.rstrip("\r\n")
-    commands = () if clock else tuple(parse_message(text, lenient=lenient))
-    return Decoded(text, count, size=size, clock=clock, commands=commands)
+    if clock:
+        return ClockText(text, size)
+    return CommandText(text, count, tuple(parse_message(text, lenient=lenient)), size)
 
 
 def pack_replies(values: Sequence[float], width: int = 4) -> bytes:
@@ -411,21 +444,18 @@ class FramedCodec:
         commands = unwrap_frames(text, self.start, self.end)
         if commands is None:
             shown = text if len(text) <= 40 else text[:37] + "..."
-            return Decoded(
-                None,
-                0,
+            return Refused(
                 f"no complete frame {self.start}...{self.end} in {shown!r}; nothing is sent "
                 f"back (SimMeR v1.2 frames every message, e.g. {self.start}u0{self.end})",
+                0,
             )
         count = commands.count(",") + 1
         if (refused := over_limit(0, count, framed=True)) is not None:
             return refused
         if error is not None:
             ids = tuple(command_ids(commands))
-            return Decoded(None, len(ids), error, ids)
-        return Decoded(
-            commands, count, commands=tuple(parse_message(commands, lenient=self.lenient))
-        )
+            return Refused(error, len(ids), ids)
+        return CommandText(commands, count, tuple(parse_message(commands, lenient=self.lenient)))
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """One frame with an ``id:value`` entry per command, in order."""
@@ -436,7 +466,7 @@ class FramedCodec:
         sends its whole transmit buffer (``[w0:True,w0:True,g0:12.3]``); nothing if none."""
         entries = []
         for decoded, values in answered:
-            ids = command_ids(decoded.text) if decoded.text is not None else list(decoded.ids)
+            ids = list(decoded.ids) if isinstance(decoded, Refused) else command_ids(decoded.text)
             entries += [self.entry(i, v) for i, v in zip(ids, values, strict=False)]
         if not entries:
             return b""
@@ -563,8 +593,8 @@ def decode_meta(data: bytes, size: int) -> Decoded:
     try:
         text = data.decode("utf-8").rstrip("\r")
     except UnicodeDecodeError as exc:
-        return Decoded(None, 1, _not_text(exc, "utf-8"), meta=True, size=size)
-    return Decoded(text, 1, meta=True, size=size)
+        return Refused(_not_text(exc, "utf-8"), size=size)
+    return LocalizationText(text, size)
 
 
 def frame_document(text: str) -> bytes:

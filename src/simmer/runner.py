@@ -8,12 +8,12 @@ read is an instant snapshot, a drive starts at the next step), and calls ``on_fr
 applies queued key and mouse actions and publishes an immutable snapshot; the window draws it in
 another thread, so drawing never delays a reply.
 
-With ``lockstep=True`` the wall clock decides nothing: the simulation advances only when a
-control program asks (the persistent protocol's clock messages, see :mod:`simmer.lockstep`)
-and by ``link_delay`` after each message it sends, so the same program gives the same run at
-any speed and on any machine. ``speed`` then only paces the steps for a window to watch.
-Clock messages also work in real time: ``!sleep S`` answers once S simulated seconds have
-passed, ``!idle`` once no drive moves, ``!time`` at once.
+What time means is its :class:`~simmer.clock.Clock`'s business: in real time the wall clock
+paces the steps; on the lockstep clock the simulation advances only when a control program asks
+(the persistent protocol's clock messages, see :mod:`simmer.lockstep`) and by ``link_delay``
+after each message it sends, so the same program gives the same run at any speed and on any
+machine (``speed`` then only paces the steps for a window to watch). The runner only asks the
+clock whether it may step, hands it each message and clock message, and lets it settle.
 """
 
 from __future__ import annotations
@@ -26,9 +26,18 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from simmer.clock import EPSILON, Clock, LockstepClock, make_clock
 from simmer.localize.messages import Localization
-from simmer.lockstep import FREE_TIME_READS
-from simmer.protocol import CLOCK_PREFIX, ClockMessage, Decoded, parse_clock, printable
+from simmer.protocol import (
+    CLOCK_PREFIX,
+    ClockMessage,
+    ClockText,
+    CommandText,
+    LocalizationText,
+    Refused,
+    parse_clock,
+    printable,
+)
 from simmer.transport.bus import CommandBus, Request
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
@@ -54,26 +63,13 @@ MAX_LOG_CLIENTS = 1024
 MAX_REASONS = 20
 """Why-NaN reasons kept per message for the client (the persistent protocol's ``?``)."""
 
-IDLE_LIMIT = 600.0
-"""Longest ``!idle`` wait, in simulated seconds (a drive that never finishes cannot hang it)."""
 SYNC_WAIT = 5.0
 """Wall seconds a clock message waits for the bytes it says the program sent before it (its
 `` @N``) to arrive and be answered. They come within a millisecond on a working link; bytes
 that never make a message (a line with no end, a two-port connection left open) would stall
 every sleep, so past this the clock goes on, with a warning, and counts them as taken."""
-EPSILON = 1e-9
 
 FrameCallback = Callable[["Runner"], bool]
-
-
-@dataclass
-class _Wait:
-    """A clock message waiting for simulated time: until ``until`` (seconds) or, with
-    ``until`` None, until no drive moves (at most until ``deadline``)."""
-
-    request: Request
-    until: float | None
-    deadline: float = math.inf
 
 
 class _LogBudget:
@@ -146,6 +142,7 @@ class Runner:
         bus: CommandBus | None = None,
         lockstep: bool = False,
         link_delay: float | None = None,
+        clock: Clock | None = None,
     ) -> None:
         self.sim = sim
         self.bus = bus if bus is not None else CommandBus()
@@ -153,16 +150,13 @@ class Runner:
         self._speed: float | None = None
         self._reschedule = True
         self.speed = speed
-        self.lockstep = lockstep
-        self.link_delay = sim.dt if link_delay is None else link_delay
-        """Simulated seconds each message costs in lockstep (default one step, as the
-        original's loop, which took in messages once per frame)."""
-        if not (math.isfinite(self.link_delay) and self.link_delay >= 0):
-            raise ValueError(f"link_delay must be 0 or more seconds, not {link_delay!r}")
-        self.clock = sim.time
-        """Lockstep: the program's clock; the simulation steps until it would pass it."""
-        self._reads = 0
-        self._waits: list[_Wait] = []
+        self.clock: Clock = (
+            clock
+            if clock is not None
+            else make_clock(sim, lockstep=lockstep, link_delay=link_delay)
+        )
+        """``clock``, else real time or lockstep (``link_delay``: simulated seconds each message
+        costs there, default one step); transports report the bytes they set aside to it."""
         self._held: deque[_Held] = deque()
         self._log = _LogBudget()
         self._forgiven = 0
@@ -199,6 +193,11 @@ class Runner:
         self._paused = value
 
     @property
+    def link_delay(self) -> float:
+        """Simulated seconds each message costs (0 in real time)."""
+        return self.clock.link_delay
+
+    @property
     def clients(self) -> list[str]:
         """Clients connected right now (from the bus)."""
         return self.bus.clients
@@ -211,28 +210,25 @@ class Runner:
         """Execute one request on the simulation and fulfil its future. Why its NaN replies are
         NaN is logged (bounded, see :data:`MAX_LOGGED`) and kept in ``request.reasons``. A
         clock message is answered later, when simulated time has got where it asks."""
-        decoded = request.decoded
-        if decoded.clock and decoded.text is not None:
-            self._clock_message(request, decoded.text)
-            return []
-        if decoded.meta and decoded.text is not None:
-            return self._localization(request, decoded.text)
-        if self.lockstep:
-            self.clock = max(self.clock, self.sim.time) + self.link_delay
-            self._reads = 0
-        self.bus.took(decoded.size)
-        if decoded.text is None:
-            error = printable(str(decoded.error))
-            client = printable(request.client)
-            self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
-            request.reasons.append(error)
-            replies = [math.nan] * decoded.count
-        else:
-            commands = decoded.commands or self.sim.parse(decoded.text)
-            answers = self.sim.answer(commands, decoded.text, request.client)
-            replies = [answer.value for answer in answers]
-            if records := [(a.level, a.why) for a in answers if a.why is not None]:
-                self._report(printable(request.client), records, request.reasons)
+        match request.decoded:
+            case ClockText(text=text):
+                self._clock_message(request, text)
+                return []
+            case LocalizationText(text=text):
+                return self._localization(request, text)
+            case CommandText(text=text, commands=commands, size=size):
+                self.clock.message(size)
+                answers = self.sim.answer(commands or self.sim.parse(text), text, request.client)
+                replies = [answer.value for answer in answers]
+                if records := [(a.level, a.why) for a in answers if a.why is not None]:
+                    self._report(printable(request.client), records, request.reasons)
+            case Refused(error=error, count=count, size=size):
+                self.clock.message(size)
+                error = printable(error)
+                client = printable(request.client)
+                self._log.log(client, logging.WARNING, "bad message from %s: %s", client, error)
+                request.reasons.append(error)
+                replies = [math.nan] * count
         request.future.set_result(replies)
         return replies
 
@@ -240,7 +236,7 @@ class Runner:
         """A localization message (``%maze``, ``%show``, ``%pose``): answered now, at no
         simulated time (no link delay) and touching nothing the simulation answers
         (:mod:`simmer.localize.messages`); a bad one answers NaN, with its reason."""
-        self.bus.took(request.decoded.size)
+        self.clock.took(request.decoded.size)
         try:
             replies, answer = self.localization.answer(text, request.client)
         except ValueError as exc:
@@ -266,21 +262,20 @@ class Runner:
             request.future.set_result([math.nan])
             return
         if clock.after is None:  # the program's own clock message, on one of its connections
-            self.bus.took(request.decoded.size)
-            self._clock(request, clock)
+            self.clock.took(request.decoded.size)
+            self.clock.start(request, clock)
             return
         self._held.append(_Held(request, clock, clock.after, time.monotonic() + SYNC_WAIT))
         self._release()
 
     def _release(self) -> bool:
         """Act on the held clock messages, in order, whose bytes have all been taken (or
-        that waited :data:`SYNC_WAIT`); True if any was. In lockstep only while the
-        simulation has caught up with the clock, so that when a clock message is acted on
-        never depends on whether the bytes before it arrived before or after it."""
+        that waited :data:`SYNC_WAIT`); True if any was. Only while the clock does not hold
+        them back (:meth:`~simmer.clock.Clock.holding`)."""
         released = False
-        while self._held and not (self.lockstep and self._due()):
+        while self._held and not self.clock.holding():
             held = self._held[0]
-            missing = held.after - self.bus.taken - self._forgiven
+            missing = held.after - self.clock.taken - self._forgiven
             if missing > 0:
                 if time.monotonic() < held.deadline:
                     break
@@ -295,90 +290,9 @@ class Runner:
                     SYNC_WAIT,
                 )
             self._held.popleft()
-            self._clock(held.request, held.clock)
+            self.clock.start(held.request, held.clock)
             released = True
         return released
-
-    def _clock(self, request: Request, clock: ClockMessage) -> None:
-        """Act on a clock message now."""
-        sim = self.sim
-        if sim.observers:
-            asked = clock.seconds if clock.kind == "sleep" else math.nan
-            sim.emit(RunEvent(sim.time, "clock", asked, sim.steps, clock.kind))
-        if not self.lockstep:
-            if clock.kind == "sleep":
-                self._waits.append(_Wait(request, sim.time + clock.seconds))
-            elif clock.kind == "idle":
-                self._waits.append(_Wait(request, None, sim.time + IDLE_LIMIT))
-            else:
-                request.future.set_result([sim.time])
-            return
-        self.clock = max(self.clock, sim.time)
-        if clock.kind == "idle":
-            self._reads = 0
-            self._waits.append(_Wait(request, None, sim.time + IDLE_LIMIT))
-            return
-        if clock.kind == "sleep" and clock.seconds > 0:
-            self._reads = 0
-            self.clock += clock.seconds
-        elif clock.kind != "sync":  # a clock read (or sleep(0)): free, unless only waited on
-            self._reads += 1
-            if self._reads > FREE_TIME_READS:
-                self._reads = 0
-                self.clock += sim.dt
-        self._waits.append(_Wait(request, self.clock))
-
-    def catch_up(self) -> None:
-        """Lockstep, in this thread: step until the clock and every clock message are met.
-
-        While only ``!idle`` waits keep it stepping, it steps without looking at the waits
-        until no drive moves or the first one's deadline passes (what :meth:`_due` would
-        decide step by step, at a fraction of the cost: a policy's run is mostly this)."""
-        sim = self.sim
-        robot = sim.robot
-        while self._due():
-            if (sim.steps + 1) * sim.dt <= self.clock + EPSILON:
-                sim.step()
-            else:
-                deadline = min(w.deadline for w in self._waits if w.until is None) - EPSILON
-                while robot.any_drive_moving and sim.time < deadline:
-                    sim.step()
-            self._settle()
-        self._settle()
-
-    def _due(self) -> bool:
-        """Lockstep: whether the simulation must step to catch up with the clock or a wait."""
-        sim = self.sim
-        if (sim.steps + 1) * sim.dt <= self.clock + EPSILON:
-            return True
-        return any(w.until is None and self._moving(w) for w in self._waits)
-
-    def _moving(self, wait: _Wait) -> bool:
-        return self.sim.robot.any_drive_moving and self.sim.time < wait.deadline - EPSILON
-
-    def _settle(self) -> None:
-        """Answer the clock messages whose time has come."""
-        if not self._waits:
-            return
-        sim = self.sim
-        waiting = []
-        for wait in self._waits:
-            if wait.until is None:
-                done = not self._moving(wait)
-                if done and self.lockstep:
-                    self.clock = max(self.clock, sim.time)
-                value = self.clock if self.lockstep else sim.time
-            elif self.lockstep:
-                done = (sim.steps + 1) * sim.dt > wait.until + EPSILON
-                value = wait.until
-            else:
-                done = sim.time >= wait.until - EPSILON
-                value = sim.time
-            if done:
-                wait.request.future.set_result([value])
-            else:
-                waiting.append(wait)
-        self._waits = waiting
 
     def _report(self, client: str, records: list[tuple[int, str]], reasons: list[str]) -> None:
         """Log why the first few NaN answers of one message are NaN (``records``: level and
@@ -420,7 +334,7 @@ class Runner:
             self._release()
         if self._log.holding:
             self._log.flush()
-        self._settle()
+        self.clock.settle()
         return served
 
     def answer(self, request: Request) -> bool:
@@ -433,7 +347,7 @@ class Runner:
             log.error("answering %s failed: %s", printable(request.client), exc, exc_info=exc)
             if not request.future.done():
                 request.future.set_exception(exc)
-        return not (self._waits or self._held or self._log.holding)
+        return not (self.clock.waiting or self._held or self._log.holding)
 
     def run(
         self,
@@ -443,13 +357,14 @@ class Runner:
     ) -> None:
         """Loop until ``on_frame`` returns False, ``stop_event`` is set, or simulated ``until``.
 
-        In lockstep the simulation steps only while the clock or a clock message asks for it,
-        and otherwise takes the next request, one at a time, so a program's messages meet the
-        simulation in the program's order; in real time it steps on the wall clock and answers
-        every request between two steps.
+        It steps while the clock lets it (:meth:`~simmer.clock.Clock.due`). A clock that
+        answers at once (real time) has every request answered between two steps, or in the
+        socket's callback as it arrives; otherwise (lockstep) the loop takes the next request,
+        one at a time, only once the simulation has caught up, so a program's messages meet the
+        simulation in the program's order.
         """
         self.sim.own(threading.get_ident())
-        if not self.lockstep:  # lockstep takes one request at a time, between steps
+        if self.clock.answers_at_once:
             self.bus.answer_with(self.answer)
         try:
             self._run(on_frame, stop_event, until)
@@ -464,7 +379,8 @@ class Runner:
         until: float | None,
     ) -> None:
         sim = self.sim
-        lockstep = self.lockstep
+        clock = self.clock
+        at_once = clock.answers_at_once
         next_step = next_frame = time.monotonic()
         while not (stop_event is not None and stop_event.is_set()):
             if until is not None and sim.time >= until - EPSILON:
@@ -480,22 +396,22 @@ class Runner:
                 self._reschedule = False
                 next_step = now
             speed = self._speed
-            if self.paused or (lockstep and not self._due()):
-                self.serve(min(wake - now, MAX_WAIT), limit=1 if lockstep else None)
+            if self.paused or not clock.due():
+                self.serve(min(wake - now, MAX_WAIT), limit=None if at_once else 1)
                 next_step = time.monotonic()
             elif speed is None or now >= next_step:
-                if not lockstep:
+                if at_once:
                     self.serve()
                 sim.step()
-                self._settle()
+                clock.settle()
                 if speed is not None:
                     next_step += sim.dt / speed
                     if now - next_step > MAX_LAG:
                         next_step = now
-            elif lockstep:  # requests wait until the simulation has caught up with the clock
-                self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))
-            else:
+            elif at_once:
                 self.serve(min(next_step - now, wake - now, MAX_WAIT))
+            else:  # requests wait until the simulation has caught up with the clock
+                self.bus.wait(min(next_step - now, wake - now, MAX_WAIT))
 
 
 class LocalLink:
@@ -512,20 +428,23 @@ class LocalLink:
     last_text: str | None = None
 
     def __init__(self, sim: Simulation, link_delay: float | None = None) -> None:
-        self.runner = Runner(sim, speed=None, lockstep=True, link_delay=link_delay)
+        self._clock = LockstepClock(sim, link_delay)
+        self.runner = Runner(sim, speed=None, clock=self._clock)
 
     def exchange(self, message: str) -> list[float]:
         """Execute one message (or clock message) and let the time it costs pass."""
-        clock = message.encode("utf-8").startswith(CLOCK_PREFIX)
-        request = Request(Decoded(message, message.count(",") + 1, clock=clock), "local")
+        if message.encode("utf-8").startswith(CLOCK_PREFIX):
+            request = Request(ClockText(message), "local")
+        else:
+            request = Request(CommandText(message, message.count(",") + 1), "local")
         self.runner.handle(request)
-        self.runner.catch_up()
+        self._clock.catch_up()
         return request.future.result()
 
     def ask(self, message: str) -> tuple[list[float], str | None]:
         """A localization message (``%maze``, ``%show``, ``%pose``): its values, or its text;
         it costs no simulated time."""
-        request = Request(Decoded(message, 1, meta=True), "local")
+        request = Request(LocalizationText(message), "local")
         self.runner.handle(request)
         return request.future.result(), (request.answer[0] if request.answer else None)
 

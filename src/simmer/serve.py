@@ -179,7 +179,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     try:  # until the recording is finished, a signal only sets the stop
         try:
-            transports = Transports(runner.bus, sim.config, options)
+            transports = Transports(runner.bus, sim.config, options, clock=runner.clock)
             with transports:
                 if options.record is not None:
                     used = options.replace(

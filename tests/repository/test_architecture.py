@@ -24,6 +24,7 @@ LAYERS = [
     {"config"},
     {"options", "world"},
     {"localize", "transport"},
+    {"clock"},
     {"runner", "record"},
     {"view"},
     {"ui"},

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 import pytest
 
 from link_support import read_frame, read_text_frame
-from simmer.protocol import Decoded
+from simmer.protocol import ClockText, CommandText
 from simmer.runner import Runner
 from simmer.transport.bus import CommandBus, Request
 from simmer.transport.tcp import REMEMBERED, REMEMBERED_BYTES, StreamServer, _StreamConnection
@@ -293,10 +293,10 @@ def test_a_clock_message_answered_at_once_is_settled_by_the_loop(loop: Loop) -> 
 
 def test_answer_says_whether_the_loop_has_work_left() -> None:
     runner = Runner(make_sim(), speed=1.0)
-    plain = Request(Decoded("u0", 1, size=3, commands=runner.sim.parse("u0")), "client")
+    plain = Request(CommandText("u0", 1, tuple(runner.sim.parse("u0")), size=3), "client")
     assert runner.answer(plain) is True
     assert plain.future.result()[0] > 0
-    clock = Request(Decoded("!sleep 1", 1, size=9, clock=True), "client")
+    clock = Request(ClockText("!sleep 1", size=9), "client")
     assert runner.answer(clock) is False
     assert not clock.future.done()
 
@@ -317,7 +317,7 @@ def test_repeated_lines_decode_once_and_what_is_kept_is_bounded(bus: CommandBus)
         for n in range(REMEMBERED + 10):
             assert server.decode(b"w0-%d" % n).commands[0].value == n
         assert len(server.remembered) <= REMEMBERED
-        assert server.decode(b"!sleep 1").clock
+        assert isinstance(server.decode(b"!sleep 1"), ClockText)
 
 
 def test_a_lenient_server_keeps_its_own_decodings(bus: CommandBus) -> None:

@@ -30,10 +30,10 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from simmer.errors import BusClosed
-from simmer.protocol import Decoded
+from simmer.protocol import CommandText, Decoded
 
 if TYPE_CHECKING:
     from _typeshed import FileDescriptorLike
@@ -124,6 +124,16 @@ class Reply(Generic[T]):
         return self._error
 
 
+class ByteCounter(Protocol):
+    """Where a transport reports the bytes of a program's messages it reads and sets aside
+    (text outside frames, a ``?`` line): the run's clock (:class:`simmer.clock.Clock`), which
+    a clock message's `` @N`` waits on (see :func:`simmer.protocol.parse_clock`)."""
+
+    def took(self, size: int) -> None:
+        """Count ``size`` bytes as taken (any thread)."""
+        ...
+
+
 class Request:
     """One received message, who sent it, and the slot its replies go into (a plain slotted
     class: one is made per message, and a dataclass's would cost half a microsecond more).
@@ -183,7 +193,6 @@ class CommandBus:
         self._answer: Callable[[Request], bool] | None = None
         self._calm = True
         """False once an answer in this round of callbacks left the loop something to do."""
-        self._taken = 0
         self._clients: dict[str, str] = {}
         self._selector = selectors.DefaultSelector()
         self._watch_lock = threading.RLock()
@@ -208,7 +217,7 @@ class CommandBus:
         ``now``: a watched socket's callback asks for it to be answered before this returns,
         which the loop does if it answers that way (:meth:`answer_with`) and nothing is
         queued ahead of it; otherwise it is queued."""
-        decoded = Decoded(message) if isinstance(message, str) else message
+        decoded = CommandText(message) if isinstance(message, str) else message
         request = Request(decoded, client)
         if (
             now
@@ -253,23 +262,6 @@ class CommandBus:
         """Interrupt the loop's wait (caller holds ``_lock`` and the bus is open)."""
         with contextlib.suppress(BlockingIOError):  # pipe full: a wake-up is pending anyway
             os.write(self._wake_w, b"\0")
-
-    def took(self, size: int, *, wake: bool = False) -> None:
-        """Count ``size`` bytes of a program's messages as taken: answered by the loop, or
-        read and set aside by a transport (text outside frames, a ``?`` line). The lockstep
-        clock waits on this count (see :func:`simmer.protocol.parse_clock`). A thread other
-        than the loop's passes ``wake``: the loop may be waiting for the count."""
-        if size <= 0:
-            return
-        with self._lock:
-            self._taken += size
-            if wake and not self._closed:
-                self._wake()
-
-    @property
-    def taken(self) -> int:
-        """Bytes of messages taken so far (see :meth:`took`)."""
-        return self._taken
 
     @property
     def queued(self) -> int:

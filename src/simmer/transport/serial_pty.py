@@ -25,8 +25,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from simmer.errors import BusClosed, SimmerError
-from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, ReplyCodec
-from simmer.transport.bus import CommandBus
+from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, Refused, ReplyCodec
+from simmer.transport.bus import ByteCounter, CommandBus
 
 log = logging.getLogger("simmer.transport")
 
@@ -37,7 +37,8 @@ SILENCE = 0.05
 class SerialServer:
     """Serve the bus over a pseudo-terminal; ``path`` is the device to open, ``link`` the
     optional stable symlink to it, ``silence`` the seconds of quiet that end a packed command
-    (the Arduino's 50 ms; a test sets it long or short to make a pause certain)."""
+    (the Arduino's 50 ms; a test sets it long or short to make a pause certain), ``clock``
+    where the bytes it sets aside are counted (None: nowhere, a port off any run's clock)."""
 
     kind = "serial"
 
@@ -49,8 +50,10 @@ class SerialServer:
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
         silence: float = SILENCE,
+        clock: ByteCounter | None = None,
     ) -> None:
         self.bus = bus
+        self.clock = clock
         self.silence = silence
         self.received = 0
         """Bytes read from the port so far (what a test waits on)."""
@@ -151,8 +154,15 @@ class SerialServer:
             del buffer[: end + len(stop)]
             self._answer(message, len(message))
         if start not in buffer:
-            self.bus.took(len(buffer), wake=True)
+            self._set_aside(len(buffer))
             buffer.clear()  # text outside frames (line endings, say) is ignored
+
+    def _set_aside(self, size: int) -> None:
+        """Count ``size`` bytes read and not answered as taken, and wake the loop: it may be
+        waiting for the count (a clock message's `` @N``)."""
+        if self.clock is not None and size > 0:
+            self.clock.took(size)
+            self.bus.interrupt()
 
     def _answer(self, data: bytes, size: int) -> None:
         """Answer one message, read from ``size`` bytes of the port; a failure is logged (the
@@ -160,9 +170,9 @@ class SerialServer:
         the thread."""
         try:
             decoded = replace(self.codec.decode(data), size=size)
-            if decoded.text is None and decoded.count == 0:
+            if isinstance(decoded, Refused) and decoded.count == 0:  # nothing to send back
                 log.warning("%s: %s", self.client, decoded.error)
-                self.bus.took(size, wake=True)
+                self._set_aside(size)
                 return
             replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
             self._write(self.codec.encode(decoded, replies))

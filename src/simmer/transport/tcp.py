@@ -44,8 +44,12 @@ from simmer.protocol import (
     MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
     META_PREFIX,
+    ClockText,
+    CommandText,
     Decoded,
+    LocalizationText,
     PackedCodec,
+    Refused,
     Replies,
     ReplyCodec,
     decode_message,
@@ -55,7 +59,7 @@ from simmer.protocol import (
     frame_text,
     printable,
 )
-from simmer.transport.bus import CommandBus, Reply, Request
+from simmer.transport.bus import ByteCounter, CommandBus, Reply, Request
 
 log = logging.getLogger("simmer.transport")
 
@@ -672,8 +676,12 @@ class StreamServer(_Server):
         timeout: float = 300.0,
         idle_timeout: float = 3600.0,
         lenient: bool = False,
+        clock: ByteCounter | None = None,
     ) -> None:
         super().__init__(bus, host, [port], timeout, idle_timeout)
+        self.clock = clock
+        """Where the bytes of ``?`` lines are counted (None: nowhere, a server off any run's
+        clock)."""
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -771,7 +779,7 @@ class _StreamConnection(_Connection):
                 self.searched = len(inbox)
                 if len(inbox) > MAX_MESSAGE_BYTES:
                     reason = f"line longer than {MAX_MESSAGE_BYTES} bytes; closing the connection"
-                    self.submit(Decoded(None, 1, reason, over_limit=True, size=len(inbox)), now)
+                    self.submit(Refused(reason, over_limit=True, size=len(inbox)), now)
                     inbox.clear()
                 break
             line = bytes(inbox[:end])
@@ -779,7 +787,8 @@ class _StreamConnection(_Connection):
             self.searched = 0
             self.messages += 1
             if line in (EXPLAIN, EXPLAIN + b"\r"):
-                self.server.bus.took(end + 1)
+                if self.stream.clock is not None:
+                    self.stream.clock.took(end + 1)
                 self.explain_later()
             elif line.startswith(META_PREFIX):
                 self.submit(decode_meta(line, end + 1), now)
@@ -857,7 +866,11 @@ class _StreamConnection(_Connection):
         if request.answer:  # a localization message's text (``%maze``)
             self.send(frame_document(request.answer[0]))
             return
-        width = 8 if request.decoded.clock else self.stream.width  # a time needs float64
+        match request.decoded:
+            case ClockText() | Refused(clock=True):  # a time needs float64
+                width = 8
+            case CommandText() | LocalizationText() | Refused():
+                width = self.stream.width
         self.send(frame_replies(values, width))
 
     def explain_later(self) -> None:

@@ -7,7 +7,7 @@ import logging
 
 from simmer.config.models import SimConfig
 from simmer.options import RunOptions
-from simmer.transport.bus import CommandBus
+from simmer.transport.bus import ByteCounter, CommandBus
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
 
@@ -26,10 +26,17 @@ def is_loopback(host: str) -> bool:
 
 class Transports:
     """The two-port server, the stream server and (optionally) the virtual serial port, on the
-    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`)."""
+    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`);
+    the bytes they read and set aside are counted by ``clock`` (the runner's, so that a clock
+    message's `` @N`` can wait for them; None: nowhere)."""
 
     def __init__(
-        self, bus: CommandBus, config: SimConfig, options: RunOptions | None = None
+        self,
+        bus: CommandBus,
+        config: SimConfig,
+        options: RunOptions | None = None,
+        *,
+        clock: ByteCounter | None = None,
     ) -> None:
         settings = config.settings
         options = options if options is not None else RunOptions.for_config(config)
@@ -59,10 +66,11 @@ class Transports:
                 timeout=settings.timeout,
                 idle_timeout=settings.idle_timeout,
                 lenient=settings.lenient_commands,
+                clock=clock,
             )
             if options.serial or options.serial_link is not None:
                 self.serial = SerialServer(
-                    bus, options.serial_link, codec=codec, timeout=settings.timeout
+                    bus, options.serial_link, codec=codec, timeout=settings.timeout, clock=clock
                 )
         except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
