@@ -1,7 +1,9 @@
-"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; the same
-generated examples on every run; a fixture keeping a CPU busy."""
+"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; a test not
+marked slow fails if it takes more than two CPU seconds; the same generated examples on every
+run; a fixture keeping a CPU busy."""
 
 import os
+import resource
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -34,6 +36,49 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         return 1 if item.get_closest_marker("slow") is not None else 2
 
     items.sort(key=order)
+
+
+QUICK_TEST_CPU_SECONDS = 2.0
+"""CPU seconds a test not marked ``slow`` (or ``fresh``) may use: plain ``pytest`` leaves the
+marked ones out and must stay under a minute on two cores."""
+_CPU_AT_CALL = pytest.StashKey[float]()
+
+
+def cpu_seconds() -> float:
+    """CPU seconds used so far by this process (every thread) and its waited-for children."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_call(item: pytest.Item) -> None:
+    """Note the CPU time as the test's body starts (its fixtures are set up by now)."""
+    item.stash[_CPU_AT_CALL] = cpu_seconds()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> pytest.TestReport:
+    """Fail a passing test not marked ``slow`` whose body used more than
+    :data:`QUICK_TEST_CPU_SECONDS`, so the quick loop stays quick.
+
+    CPU time, not wall time: the suite runs on every core while other work shares them (two
+    busy cores in CI), and a test's wall time then grows with the load, not with what it does;
+    the CPU time of this process (all its threads) and of the children it waited for does not.
+    A test that only waits (a timeout, a sleep) is not caught here: ``--durations`` shows it.
+    """
+    report: pytest.TestReport = yield
+    quick = item.get_closest_marker("slow") is None and item.get_closest_marker("fresh") is None
+    if report.when == "call" and report.passed and quick and _CPU_AT_CALL in item.stash:
+        used = cpu_seconds() - item.stash[_CPU_AT_CALL]
+        if used > QUICK_TEST_CPU_SECONDS:
+            report.outcome = "failed"
+            report.longrepr = (
+                f"this test used {used:.1f} CPU seconds, more than QUICK_TEST_CPU_SECONDS "
+                f"({QUICK_TEST_CPU_SECONDS:g}) in tests/conftest.py: mark it "
+                "@pytest.mark.slow, or make it quicker"
+            )
+    return report
 
 
 @pytest.fixture
