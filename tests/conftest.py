@@ -1,9 +1,10 @@
 """Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; a test not
 marked slow fails if it takes more than two CPU seconds; the same generated examples on every
-run; a fixture keeping a CPU busy."""
+run; a fixture keeping a CPU busy, and one giving Ctrl-C its usual effect."""
 
 import os
 import resource
+import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -88,3 +89,13 @@ def busy_cpu() -> Iterator[None]:
     yield
     hog.kill()
     hog.wait()
+
+
+@pytest.fixture
+def ctrl_c() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt here, and the processes the test starts get SIGINT's
+    default, even when pytest was started with SIGINT ignored (``nohup``, ``cmd &`` in a
+    script): Python then leaves it ignored, and its children inherit that."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)

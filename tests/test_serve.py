@@ -83,6 +83,7 @@ def test_a_stop_signal_landing_while_the_run_stops_itself_does_not_hang_it() -> 
     assert received == ["SIGTERM"]
 
 
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("first", ["SIGINT", "SIGTERM", "its end"])
 def test_ctrl_c_once_a_run_is_stopping_is_only_noted(first: str) -> None:
     """Ctrl-C raises KeyboardInterrupt while the run goes on; once it is stopping (a first
@@ -133,6 +134,7 @@ def test_ctrl_c_as_the_program_starts_still_stops_it(
     assert started[0] not in descendants()
 
 
+@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_in_the_cleanup_after_an_error_still_stops_the_program(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -541,6 +541,7 @@ def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
     shutil.copy(POLICIES, tmp_path)
     sweep = tmp_path / "sweep.toml"

@@ -344,6 +344,7 @@ def test_simmer_run_video_makes_its_folder(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:
     path = tmp_path / "stopped.mp4"
     command = [sys.executable, "-m", "simmer", "run", "--headless", "--video", str(path), *PORTS]
