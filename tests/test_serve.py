@@ -18,6 +18,7 @@ from simmer.world import Simulation
 pytestmark = pytest.mark.timeout(60)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGHUP])
 def test_sigterm_and_sighup_stop_cleanly_and_remove_the_serial_link(
     tmp_path: Path, how: signal.Signals

@@ -79,6 +79,7 @@ def local_run() -> str:
     return fingerprint.hexdigest()
 
 
+@pytest.mark.slow
 def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> None:
     runs = {
         transport: [served_run(transport) for _ in range(3)]
@@ -89,6 +90,7 @@ def test_one_program_gives_one_run_through_every_transport(busy_cpu: None) -> No
     assert len(hashes) == 1, runs
 
 
+@pytest.mark.slow
 def test_speed_does_not_change_the_run() -> None:
     assert served_run("stream", speed=None) == served_run("stream", speed=50.0)
 
@@ -116,6 +118,7 @@ def test_idle_waits_for_the_drives() -> None:
     assert finished == pytest.approx(2.0 + sim.dt, abs=2 * sim.dt)
 
 
+@pytest.mark.slow
 def test_dead_reckoning_under_the_lockstep_clock_is_the_same_at_every_speed() -> None:
     reports = []
     for speed in (None, 20.0, None):

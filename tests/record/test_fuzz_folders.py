@@ -179,6 +179,7 @@ BASE: dict[str, Any] = {
 KEYS = sorted(KNOWN_KEYS | {"count", "grid.x", "sample.count", "policy", "nonsense"})
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(data=st.data())
 def test_a_fuzzed_sweep_is_read_or_refused(data: st.DataObject) -> None:
@@ -204,6 +205,7 @@ def test_a_fuzzed_sweep_is_read_or_refused(data: st.DataObject) -> None:
     assert "\n" not in message
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(cut=st.integers(0, len(SWEEP)), junk=st.text(max_size=30))
 def test_a_sweep_file_spoilt_anywhere_is_read_or_refused(

@@ -95,6 +95,7 @@ def record_with_plugin(folder: Path) -> Path:
     return folder / "run"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["replay", "render", "plot"])
 def test_a_plugin_a_folder_names_is_never_imported_without_trust(
     tmp_path: Path, command: str
@@ -109,6 +110,7 @@ def test_a_plugin_a_folder_names_is_never_imported_without_trust(
         assert_one_plain_line(result, "manifest.json", "plug-ins (evil.py)", "--trust")
 
 
+@pytest.mark.slow
 def test_a_folder_with_plugins_is_resimulated_with_trust_or_the_plugins_named(
     tmp_path: Path,
 ) -> None:
@@ -274,6 +276,7 @@ def test_the_replay_limit_is_an_hour_by_default(copy: Path) -> None:
     assert_one_plain_line(result, f"{steps:,}", "--max-seconds")
 
 
+@pytest.mark.slow
 def test_the_replay_limit_is_raised_by_max_seconds(copy: Path) -> None:
     """The same rule as the default's, at a limit a test can replay past in a moment."""
     steps = 90 * 60  # 90 s in (the recorded run itself is shorter than a minute)
@@ -284,6 +287,7 @@ def test_the_replay_limit_is_raised_by_max_seconds(copy: Path) -> None:
     assert folder.check.reply_differences  # the made-up command's reply differs
 
 
+@pytest.mark.slow
 def test_a_killed_recording_claims_no_rows_its_trace_lacks(copy: Path) -> None:
     """After kill -9 the trace lacks its last rows: the check counts those it compared."""
     (copy / "report.json").unlink()
@@ -297,6 +301,7 @@ def test_a_killed_recording_claims_no_rows_its_trace_lacks(copy: Path) -> None:
     assert f"({kept - 1} trace rows" in check.headline()
 
 
+@pytest.mark.slow
 def test_a_trace_row_with_an_absurd_pose_is_left_out_of_the_plot(copy: Path) -> None:
     """An edited x of 1e300 printed a path length of 300 digits across the plot's title."""
     _spoil_cell(copy / "trace.csv", 20, "x", "1e300")

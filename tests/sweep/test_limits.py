@@ -90,6 +90,7 @@ def test_each_sweep_limit_is_refused_at_once_naming_it(tmp_path: Path, name: str
     refuse(tmp_path, text, *words)
 
 
+@pytest.mark.slow
 def test_a_bad_value_in_a_large_grid_is_found_by_checking_each_value(tmp_path: Path) -> None:
     """90,000 runs: each value of each key is built once, not every combination."""
     values = [i / 1000 for i in range(300)]

@@ -226,6 +226,7 @@ def test_the_workers_of_a_killed_sweep_exit_with_their_programs(sweep_folder: Pa
     assert_all_gone(sweep, below, sweep_folder)
 
 
+@pytest.mark.slow
 def test_a_run_stops_the_children_its_program_detached(tmp_path: Path) -> None:
     program = tmp_path / "detach.py"
     program.write_text(
