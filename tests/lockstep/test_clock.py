@@ -34,19 +34,28 @@ def noisy_sim() -> Simulation:
 
 
 class Fingerprint:
-    """A hash of every command, reply and pose, with the simulated time of each."""
+    """A hash of every command, reply and pose, with the simulated time of each, up to the
+    program's last message.
+
+    The step that message costs (the link delay) is owed when its reply goes out; the program
+    may exit and end the run before the loop takes it, and whether it does depends on how
+    busy the machine is (at a paced speed it is due a moment later), so the poses after the
+    last message are left out."""
 
     def __init__(self, sim: Simulation) -> None:
         self.digest = hashlib.sha256()
-        self.steps = 0
+        self.poses: list[bytes] = []
+        """Poses since the last command: hashed when a command follows them."""
         sim.add_observer(self)
 
     def __call__(self, event: Event) -> None:
         if isinstance(event, CommandEvent):
+            for pose in self.poses:
+                self.digest.update(pose)
+            self.poses.clear()
             self.digest.update(repr((event.time, event.message, event.replies)).encode())
         elif isinstance(event, StepEvent):
-            self.steps += 1
-            self.digest.update(repr((event.time, tuple(event.pose))).encode())
+            self.poses.append(repr((event.time, tuple(event.pose))).encode())
 
     def hexdigest(self) -> str:
         return self.digest.hexdigest()
