@@ -69,6 +69,7 @@ def test_answer_types_the_runs_own_drawn_target() -> None:
     assert "delivered it at" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("flag", "value", "words"),
     [

@@ -226,8 +226,8 @@ HOSTILE: dict[str, tuple[Callable[[Path], None], tuple[str, ...], tuple[str, ...
     ),
 }
 
-SLOW = {"walls 2000"}
-"""Cases that take seconds with their memory traced (a 3.6 MB manifest parsed)."""
+SLOW = {"walls 2000", "manifest huge"}
+"""Cases that take seconds with their memory traced (a manifest of megabytes parsed)."""
 
 
 def _grow(path: Path) -> None:
@@ -261,6 +261,7 @@ def test_a_hostile_folder_gets_one_plain_line_at_once(copy: Path, name: str) -> 
         assert peak < REFUSE_WITHIN, (command, peak)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("report", "words"),
     [('{"outcome": ', ("report.json", "JSON")), ('{"outcome": "x"}', ("report.json",))],

@@ -415,6 +415,7 @@ def test_simmer_render_cuts_a_clip_of_the_time_asked_for(run_folder: Path, tmp_p
         assert image.size == (1576, 920)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("times", "message"),
     [
