@@ -2,6 +2,9 @@
 longer (a test checks that a limit acts, never how long it took on a shared machine).
 
 - refusing a 10,000 x 10,000 maze, by its size (target: under a second);
+- refusing a sweep of 10**12 runs, and a run folder whose events.jsonl is 300 MB, in CPU time
+  (target: under a second each; tests/sweep/test_limits.py and
+  tests/record/test_hostile_folders.py check only that nothing is expanded or read whole);
 - a sweep run's wall-clock limit: the wall time of a run whose program hangs (limit 1.5 s,
   target under 10 s: starting the simulator and the program counts too) and of a policy
   spinning in a thread of its own, as on a Dask worker (limit 0.5 s, target under 5 s).
@@ -20,11 +23,14 @@ import tomllib
 from importlib.resources import files
 from pathlib import Path
 
+from simmer import Simulation
 from simmer.config import config_from_dict
-from simmer.errors import ConfigError
+from simmer.errors import ConfigError, ReplayError, SweepError
+from simmer.record import RunRecorder
 from simmer.sweep import run_sweep
 from simmer.sweep.runs import RunSpec, execute
 from simmer.sweep.spec import sweep_from_dict
+from simmer.view.replay_model import Recording
 
 ROOT = Path(__file__).resolve().parent.parent
 LAB1 = ROOT / "examples" / "lab1_rover.toml"
@@ -42,6 +48,35 @@ def refuse_huge_maze() -> float:
     except ConfigError:
         return time.perf_counter() - start
     raise SystemExit("a 10,000 x 10,000 maze was accepted")
+
+
+def refuse_huge_sweep(folder: Path) -> float:
+    """CPU seconds to refuse a sweep of 1000**4 runs."""
+    grid = {f"drives.w0.error.{axis}": list(range(1000)) for axis in ("x", "y", "rotation")}
+    grid["sensors.u0.error"] = list(range(1000))
+    data = {"config": str(LAB1), "program": "python robot.py", "grid": grid}
+    start = time.process_time()
+    try:
+        sweep_from_dict(data, folder)
+    except SweepError:
+        return time.process_time() - start
+    raise SystemExit("a sweep of 10**12 runs was accepted")
+
+
+def refuse_huge_events(folder: Path) -> float:
+    """CPU seconds to refuse a run folder whose events.jsonl is 300 MB (sparse)."""
+    run = folder / "huge-events"
+    sim = Simulation.from_config()
+    with RunRecorder(sim, run):
+        sim.step(6)
+    with (run / "events.jsonl").open("r+b") as file:
+        file.truncate(300 * 2**20)
+    start = time.process_time()
+    try:
+        Recording.load(run)
+    except ReplayError:
+        return time.process_time() - start
+    raise SystemExit("a 300 MB events.jsonl was read")
 
 
 def hanging_program(folder: Path, limit: float = 1.5) -> float:
@@ -72,6 +107,8 @@ def main() -> dict[str, float]:
         folder = Path(scratch)
         figures = {
             "refuse a 10,000 x 10,000 maze (s)": (refuse_huge_maze(), 1.0),
+            "refuse a sweep of 10**12 runs (CPU s)": (refuse_huge_sweep(folder), 1.0),
+            "refuse a 300 MB events.jsonl (CPU s)": (refuse_huge_events(folder), 1.0),
             "a run whose program hangs, wall limit 1.5 s (s)": (hanging_program(folder), 10.0),
             "a policy spinning in a thread, wall limit 0.5 s (s)": (spinning_policy(folder), 5.0),
         }

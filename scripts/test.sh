@@ -9,4 +9,5 @@ export SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy
 .venv/bin/ruff check .
 .venv/bin/ruff format --check .
 .venv/bin/mypy
-.venv/bin/pytest "$@"
+# -m "": every test, the slow ones too (plain `pytest` leaves out those marked slow or fresh).
+.venv/bin/pytest -m "" "$@"

@@ -1,7 +1,10 @@
-"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; the same
-generated examples on every run; a fixture keeping a CPU busy."""
+"""Test setup: no window ever opens (SDL dummy drivers); the slow tests go first; a test not
+marked slow fails if it takes more than two CPU seconds; the same generated examples on every
+run; a fixture keeping a CPU busy, and one giving Ctrl-C its usual effect."""
 
 import os
+import resource
+import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -36,6 +39,63 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     items.sort(key=order)
 
 
+QUICK_TEST_CPU_SECONDS = 2.0
+"""CPU seconds a test not marked ``slow`` (or ``fresh``) may use: plain ``pytest`` leaves the
+marked ones out and must stay under a minute on two cores."""
+_CPU_AT_CALL = pytest.StashKey[float]()
+
+
+def cpu_seconds() -> float:
+    """CPU seconds used so far by this process (every thread) and its waited-for children."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compiled_kernels() -> None:
+    """Compile the Numba kernels (or load them from their cache) before any test's body: in a
+    fresh clone, as in CI, compiling them takes about 5 CPU seconds, which would count against
+    whichever quick test first drives or reads a sensor."""
+    from simmer import Simulation
+    from simmer.runner import LocalLink
+
+    link = LocalLink(Simulation.from_config())
+    link.exchange("u0,u1,u2,u3")
+    link.exchange("w0-1")
+    link.clock("!idle")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_call(item: pytest.Item) -> None:
+    """Note the CPU time as the test's body starts (its fixtures are set up by now)."""
+    item.stash[_CPU_AT_CALL] = cpu_seconds()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> pytest.TestReport:
+    """Fail a passing test not marked ``slow`` whose body used more than
+    :data:`QUICK_TEST_CPU_SECONDS`, so the quick loop stays quick.
+
+    CPU time, not wall time: the suite runs on every core while other work shares them (two
+    busy cores in CI), and a test's wall time then grows with the load, not with what it does;
+    the CPU time of this process (all its threads) and of the children it waited for does not.
+    A test that only waits (a timeout, a sleep) is not caught here: ``--durations`` shows it.
+    """
+    report: pytest.TestReport = yield
+    quick = item.get_closest_marker("slow") is None and item.get_closest_marker("fresh") is None
+    if report.when == "call" and report.passed and quick and _CPU_AT_CALL in item.stash:
+        used = cpu_seconds() - item.stash[_CPU_AT_CALL]
+        if used > QUICK_TEST_CPU_SECONDS:
+            report.outcome = "failed"
+            report.longrepr = (
+                f"this test used {used:.1f} CPU seconds, more than QUICK_TEST_CPU_SECONDS "
+                f"({QUICK_TEST_CPU_SECONDS:g}) in tests/conftest.py: mark it "
+                "@pytest.mark.slow, or make it quicker"
+            )
+    return report
+
+
 @pytest.fixture
 def busy_cpu() -> Iterator[None]:
     """Another process keeping a CPU busy while the test runs (runs must not notice)."""
@@ -43,3 +103,13 @@ def busy_cpu() -> Iterator[None]:
     yield
     hog.kill()
     hog.wait()
+
+
+@pytest.fixture
+def ctrl_c() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt here, and the processes the test starts get SIGINT's
+    default, even when pytest was started with SIGINT ignored (``nohup``, ``cmd &`` in a
+    script): Python then leaves it ignored, and its children inherit that."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)

@@ -7,10 +7,11 @@ import re
 import threading
 import time
 import tomllib
+import tracemalloc
 from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import pytest
 
@@ -139,3 +140,19 @@ def project_data(**scenario: str) -> dict[str, Any]:
 def project_sim(seed: int = 1, **scenario: str) -> Simulation:
     """A simulation of examples/project.toml with scenario settings replaced."""
     return Simulation(make_config(project_data(**scenario)), seed=seed)
+
+
+T = TypeVar("T")
+
+
+def peak_memory(call: Callable[[], T]) -> tuple[T, int]:
+    """``call()``'s result and the most memory (bytes) Python allocated at once while it ran:
+    a bound on the work done that, unlike its time, is the same on a busy machine or a quiet
+    one (a file read whole or a grid of runs built shows; how long it took: benchmarks/)."""
+    tracemalloc.start()
+    try:
+        result = call()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return result, peak

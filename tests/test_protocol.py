@@ -83,6 +83,7 @@ def test_frame_header_says_width_and_count() -> None:
         unpack_replies(b"\x00" * 5, 4)
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None)
 @given(st.binary(max_size=200))
 def test_any_bytes_decode_to_one_reply_per_command(data: bytes) -> None:
@@ -96,6 +97,7 @@ def test_any_bytes_decode_to_one_reply_per_command(data: bytes) -> None:
             assert command.error is not None or math.isfinite(command.value)
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None)
 @given(
     st.text(alphabet="uwrmx0123", min_size=2, max_size=2),

@@ -27,6 +27,7 @@ from helpers import wait_for
 pytestmark = pytest.mark.timeout(60)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGHUP])
 def test_sigterm_and_sighup_stop_cleanly_and_remove_the_serial_link(
     tmp_path: Path, how: signal.Signals
@@ -90,6 +91,7 @@ def test_a_stop_signal_landing_while_the_run_stops_itself_does_not_hang_it() -> 
     assert received == ["SIGTERM"]
 
 
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("first", ["SIGINT", "SIGTERM"])
 def test_ctrl_c_stops_a_run_as_sigterm_does_and_raises_nothing(first: str) -> None:
     """Ctrl-C sets the run's stop and wakes its loop, as SIGTERM does, and raises nothing, the
@@ -114,6 +116,7 @@ def test_ctrl_c_stops_a_run_as_sigterm_does_and_raises_nothing(first: str) -> No
     assert signal.getsignal(signal.SIGINT) is before
 
 
+@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_as_the_program_starts_still_stops_it(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -136,6 +139,7 @@ def test_ctrl_c_as_the_program_starts_still_stops_it(
     assert started[0] not in descendants()
 
 
+@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_in_the_cleanup_after_an_error_still_stops_the_program(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -177,6 +181,7 @@ WHERE_CTRL_C_LANDS = {
 write (the trace flushes rows during the run; events.jsonl closes as the recording ends)."""
 
 
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("where", WHERE_CTRL_C_LANDS)
 def test_ctrl_c_landing_in_a_recording_write_leaves_it_whole(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, where: str
@@ -322,6 +327,7 @@ def _zombie(pid: int) -> bool:
         return True
 
 
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_ctrl_c_at_any_moment_of_a_recorded_program_run_finishes_the_recording(
@@ -336,6 +342,7 @@ def test_ctrl_c_at_any_moment_of_a_recorded_program_run_finishes_the_recording(
     _interrupt_recorded_runs(tmp_path, SIGINT_MOMENTS)
 
 
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_ctrl_c_finishes_the_recording_beside_a_busy_cpu(tmp_path: Path, busy_cpu: None) -> None:

@@ -20,6 +20,7 @@ def check(*args: str | Path) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ["/dev/zero", "."])
 def test_a_configuration_that_is_not_a_regular_file_says_so(path: str) -> None:
     done = check(path)
@@ -27,6 +28,7 @@ def test_a_configuration_that_is_not_a_regular_file_says_so(path: str) -> None:
     assert f"{path}: is not a regular file (a folder, a device or a pipe)" in done.stderr
 
 
+@pytest.mark.slow
 def test_a_plugin_calling_os_exit_is_reported_not_obeyed(tmp_path: Path) -> None:
     (tmp_path / "quits.py").write_text("import os\nos._exit(9)\n")
     (tmp_path / "robot.toml").write_text('plugins = ["quits.py"]\n')

@@ -68,6 +68,7 @@ def test_the_command_list_says_each_command_in_one_whole_line() -> None:
 HEAVY = ("numba", "numpy", "pygame", "pydantic", "matplotlib", "av")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", [[], ["run"], ["sweep"]])
 def test_help_loads_nothing_heavy(command: list[str]) -> None:
     probe = (

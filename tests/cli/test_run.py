@@ -92,6 +92,7 @@ def test_a_program_run_names_only_the_ports_it_serves() -> None:
     assert "Noise: none" in result.output
 
 
+@pytest.mark.slow
 def test_video_keeps_an_existing_file_unless_forced(tmp_path: Path) -> None:
     path = tmp_path / "task1.mp4"
     path.write_bytes(b"last week's recording")
@@ -114,6 +115,7 @@ def test_video_keeps_an_existing_file_unless_forced(tmp_path: Path) -> None:
     assert path.read_bytes()[4:8] == b"ftyp"  # an MP4 now
 
 
+@pytest.mark.slow
 def test_cli_refuses_a_serial_link_path_that_exists(tmp_path: Path) -> None:
     path = tmp_path / "robot"
     path.symlink_to("/dev/null")

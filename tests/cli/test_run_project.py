@@ -43,6 +43,7 @@ def cli(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess[str]:
     )  # fmt: skip
 
 
+@pytest.mark.slow
 def test_an_unchanged_student_program_is_told_its_target_and_delivers() -> None:
     # plain two-port sockets, the target read at input(), the gripper's command as any other
     result = cli("--seed", "3", "--block", "6,14", "--target", "B3",
@@ -57,6 +58,7 @@ def test_an_unchanged_student_program_is_told_its_target_and_delivers() -> None:
     assert "collisions 0" in out
 
 
+@pytest.mark.slow
 def test_answer_types_the_runs_own_drawn_target() -> None:
     result = cli("--seed", "11", "--program", PROGRAM, "--answer", "{target}")
     out = result.stdout
@@ -67,6 +69,7 @@ def test_answer_types_the_runs_own_drawn_target() -> None:
     assert "delivered it at" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("flag", "value", "words"),
     [
@@ -83,6 +86,7 @@ def test_bad_overrides_are_one_plain_line(flag: str, value: str, words: str) -> 
     assert "Traceback" not in result.stderr + result.stdout
 
 
+@pytest.mark.slow
 def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     sim = Simulation.from_config(EXAMPLES / "project.toml", seed=21)
@@ -157,6 +161,7 @@ def test_a_video_frame_shows_the_zones_and_the_carried_block(tmp_path: Path) -> 
 # ----------------------------------------------------------------------------- sweeps
 
 
+@pytest.mark.slow
 def test_scenario_all_expands_to_every_start_and_zone(tmp_path: Path) -> None:
     data = {
         "config": str(EXAMPLES / "project.toml"),

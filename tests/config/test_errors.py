@@ -144,6 +144,7 @@ def write_broken(tmp_path: Path, name: str, mutate: Callable[[Data], None]) -> P
     return path
 
 
+@pytest.mark.slow
 def test_simmer_check_reports_each_broken_file_with_exit_1(tmp_path: Path) -> None:
     runner = CliRunner()
     for name, mutate, key, _ in BROKEN:
@@ -155,6 +156,7 @@ def test_simmer_check_reports_each_broken_file_with_exit_1(tmp_path: Path) -> No
         assert re.search(rf"{re.escape(str(path))}(:\d+)?: {re.escape(key)}", shown), (name, shown)
 
 
+@pytest.mark.slow
 def test_simmer_check_as_a_process_prints_no_traceback(tmp_path: Path) -> None:
     path = write_broken(tmp_path, "typo", set_key("frame_rat", value=30))
     done = subprocess.run(

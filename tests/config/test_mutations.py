@@ -178,6 +178,7 @@ def test_mutated_configuration_is_refused_cleanly_or_runs(source: str, mutate: M
         assert not any(word in line for word in LIBRARY_WORDING), line
 
 
+@pytest.mark.slow
 def test_the_mutations_both_refuse_and_run() -> None:
     """The drawn sample holds both outcomes (so neither check above is vacuous)."""
     results = [validated(source, mutate) for source, _, mutate in drawn_mutations()]

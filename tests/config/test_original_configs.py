@@ -233,6 +233,7 @@ def test_omni_wheel_directions_scale_the_odometers(tmp_path: Path) -> None:
     assert tuple(sim.robot.pose) == pytest.approx((6.0, 32.0, 180.0))  # the motion is unchanged
 
 
+@pytest.mark.slow
 def test_beamwidth_zero_reads_like_a_single_ray(tmp_path: Path) -> None:
     sim = load_quirk(tmp_path, "beamwidth 0")
     assert sim.place_robot(68, 18, 190)  # the fan's outer rays meet a nearer wall

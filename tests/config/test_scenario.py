@@ -13,6 +13,7 @@ from simmer.geometry import polygon_hits_grid
 from helpers import make_config, project_data, project_sim
 
 
+@pytest.mark.slow
 def test_the_same_seed_gives_the_same_scenario_and_seeds_differ() -> None:
     a = project_sim(seed=7, start="random")
     b = project_sim(seed=7, start="random")
@@ -33,6 +34,7 @@ def test_each_part_has_its_own_stream() -> None:
     assert a.scenario.block == b.scenario.block
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["random", "open"])
 def test_every_drawn_start_and_block_is_valid(where: str) -> None:
     config = make_config(project_data(start=where))

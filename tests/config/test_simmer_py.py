@@ -64,6 +64,7 @@ def edited(tmp_path: Path, source: Path, old: str, new: str) -> Path:
 # ----------------------------------------------------------------------------- loading
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ALL, ids=lambda p: p.parent.name + "/" + p.name)
 def test_fixture_loads_and_matches_its_converted_toml(path: Path, tmp_path: Path) -> None:
     toml = tmp_path / "robot.toml"

@@ -254,6 +254,7 @@ def test_a_row_too_long_is_named() -> None:
     assert [key for key, _ in issues_of(data)] == ["walls[1]"]
 
 
+@pytest.mark.slow
 def test_the_largest_maze_allowed_runs() -> None:
     data = default_data()
     side = MAX_CELLS_PER_SIDE
@@ -334,6 +335,7 @@ def test_deeply_nested_toml_array_is_one_line(tmp_path: Path) -> None:
     assert "nested too deeply" in output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "code",
     [

@@ -251,6 +251,7 @@ register_device_kind("test_check_scribble", Scribble)
 '''
 
 
+@pytest.mark.slow
 def test_check_calls_each_device_and_names_the_users_line(tmp_path: Path) -> None:
     (tmp_path / "devices").mkdir()
     (tmp_path / "devices" / "sloppy.py").write_text(SLOPPY, encoding="utf-8")

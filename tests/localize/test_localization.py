@@ -179,6 +179,7 @@ def example_run(tmp_path: Path, *options: str, record: Path | None = None) -> li
     return events
 
 
+@pytest.mark.slow
 def test_showing_changes_no_reply_and_no_timing_under_lockstep(tmp_path: Path) -> None:
     # Both runs find Numba's compiled kernels on disk: a program's clock reads while Numba
     # compiles (its timers follow the simulated clock too) would differ from the next run's.
@@ -191,6 +192,7 @@ def test_showing_changes_no_reply_and_no_timing_under_lockstep(tmp_path: Path) -
     assert fingerprint(shown) == fingerprint(hidden)
 
 
+@pytest.mark.slow
 def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
     from simmer.view.replay_model import Recording
 
@@ -214,6 +216,7 @@ def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
     assert (folder / "localization.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_a_hostile_belief_in_a_run_folder_is_one_line_and_the_rest_replays(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

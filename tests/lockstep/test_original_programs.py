@@ -69,6 +69,7 @@ def run_student_program(pattern: str, release: str, capfd: pytest.CaptureFixture
     return f"{printed}{events.count} events {events.digest.hexdigest()}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("release", list(RELEASES))
 @pytest.mark.parametrize("pattern", ["dead_reckoning", "two_sends", "two_receives"])
 def test_an_original_program_runs_unchanged_and_the_same_every_time(

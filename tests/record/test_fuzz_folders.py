@@ -6,7 +6,9 @@ Run folders start from a short recorded run (with a reset, collisions, NaN repli
 to three mutations: a JSON value replaced by an odd one (NaN, huge, negative, text, a list, a
 deep list) or removed, a line of events.jsonl cut, doubled or spoilt, a cell of trace.csv made
 odd, a file emptied or filled with bytes that are not text. Sweep files start from the example
-and get keys, values and text drawn the same way.
+and get keys, values and text drawn the same way. A hang fails the test at its timeout; how
+fast a refusal comes is measured in benchmarks/bench_limits.py, not here (a busy machine would
+make any bound on its time flaky, and tracing its memory tripled the test's time).
 """
 
 from __future__ import annotations
@@ -40,8 +42,6 @@ ODD: list[Any] = [
     "abc", "nan", "inf", [], {}, [[[[1]]]], [1e308] * 3, {"a": {"b": {}}}, "../../etc/passwd",
     ["evil.py"], 99,
 ]  # fmt: skip
-CPU_BOUND = 10.0
-"""CPU seconds a fuzzed folder may take (a real one of this size takes well under one)."""
 
 
 @pytest.fixture(scope="module")
@@ -125,15 +125,12 @@ def mutate_folder(folder: Path, data: st.DataObject) -> None:
 
 
 def assert_answered(args: list[str]) -> None:
-    start = time.process_time()
     result = CliRunner().invoke(app, args)
-    seconds = time.process_time() - start
     assert result.exit_code in (0, 1), (args, result.output)
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(
         result.exception
     )
     assert "Traceback" not in result.output
-    assert seconds < CPU_BOUND, seconds
 
 
 @pytest.mark.slow
@@ -180,6 +177,7 @@ BASE: dict[str, Any] = {
 KEYS = sorted(KNOWN_KEYS | {"count", "grid.x", "sample.count", "policy", "nonsense"})
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(data=st.data())
 def test_a_fuzzed_sweep_is_read_or_refused(data: st.DataObject) -> None:
@@ -205,6 +203,7 @@ def test_a_fuzzed_sweep_is_read_or_refused(data: st.DataObject) -> None:
     assert "\n" not in message
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(cut=st.integers(0, len(SWEEP)), junk=st.text(max_size=30))
 def test_a_sweep_file_spoilt_anywhere_is_read_or_refused(

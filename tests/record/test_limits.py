@@ -64,6 +64,7 @@ def check_files(folder: Path, rows: int) -> None:
     assert len(lines) - 1 == rows
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("full", ["events", "trace"])
 def test_a_full_disk_stops_the_recording_at_whole_lines_and_says_so(
     tmp_path: Path, full: str
@@ -125,6 +126,7 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
         subprocess.run(["umount", "-l", mount], check=False)
 
 
+@pytest.mark.slow
 def test_a_run_recording_onto_a_small_disk_keeps_serving(small_disk: Path, tmp_path: Path) -> None:
     program = tmp_path / "chatty.py"
     program.write_text(
@@ -168,6 +170,7 @@ def test_a_recorded_run_is_limited_to_an_hour_by_default(
     assert "a recorded program is stopped after 3600 s of wall time (--timeout changes it)" in said
 
 
+@pytest.mark.slow
 def test_a_recorded_run_stops_at_its_simulated_time_limit(tmp_path: Path) -> None:
     # The limit lowered to a minute in this run's process: an hour is 216,000 steps, 8 s of CPU.
     lowered = (

@@ -96,6 +96,7 @@ def path_pixels(image: Image.Image) -> np.ndarray:
     return np.abs(rgb - want).sum(axis=2) < 40
 
 
+@pytest.mark.slow
 def test_path_plot_shows_the_path_where_the_trace_says(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     poses = lab_path()
@@ -127,6 +128,7 @@ def test_path_plot_shows_the_path_where_the_trace_says(tmp_path: Path) -> None:
     assert not path[round(r0) : round(r1), round(c0) : round(c1)].any()
 
 
+@pytest.mark.slow
 def test_plot_run_writes_both_pngs_and_links_them_from_the_report(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     write_run(folder, lab_path())
@@ -150,6 +152,7 @@ def test_plot_run_writes_both_pngs_and_links_them_from_the_report(tmp_path: Path
     assert (folder / "report.md").read_text(encoding="utf-8") == report  # linked once
 
 
+@pytest.mark.slow
 def test_a_report_that_already_shows_the_plots_is_left_alone(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     write_run(folder, lab_path())
@@ -183,6 +186,7 @@ def test_sensor_panels_group_by_kind_or_else_by_id_prefix(tmp_path: Path) -> Non
     ]
 
 
+@pytest.mark.slow
 def test_a_reset_starts_a_new_part_of_the_run(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     first = [(6.0, 42.0 - i * 0.1, 180.0) for i in range(120)]
@@ -198,6 +202,7 @@ def test_a_reset_starts_a_new_part_of_the_run(tmp_path: Path) -> None:
     assert len(plot_run(folder)) == 2
 
 
+@pytest.mark.slow
 def test_simmer_plot_names_the_files(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     write_run(folder, lab_path())

@@ -75,6 +75,7 @@ def trace_rows(path: Path) -> list[dict[str, str]]:
 # ----------------------------------------------------------------------------- replay
 
 
+@pytest.mark.slow
 def test_a_recorded_noisy_run_replays_from_its_folder_to_the_same_trace(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     original = record_noisy_run(folder)
@@ -100,6 +101,7 @@ def test_a_recorded_noisy_run_replays_from_its_folder_to_the_same_trace(tmp_path
     assert log.read_bytes() == (folder / "events.jsonl").read_bytes()
 
 
+@pytest.mark.slow
 def test_a_different_seed_replays_to_a_different_trace(tmp_path: Path) -> None:
     folder = tmp_path / "run"
     record_noisy_run(folder, reset=False)
@@ -320,6 +322,7 @@ with connect() as robot:
 """
 
 
+@pytest.mark.slow
 def test_a_run_killed_with_sigkill_leaves_events_whose_every_line_parses(tmp_path: Path) -> None:
     program = tmp_path / "forever.py"
     program.write_text(FOREVER)

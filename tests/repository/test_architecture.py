@@ -78,6 +78,7 @@ def sources() -> list[Path]:
     ]
 
 
+@pytest.mark.slow
 def test_every_package_imports_only_packages_below_it() -> None:
     upward = []
     for path in sources():
@@ -96,6 +97,7 @@ def test_every_package_has_its_layer() -> None:
     assert units <= set(LAYER), f"add to LAYERS: {sorted(units - set(LAYER))}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("package", sorted(HEADLESS))
 def test_a_headless_package_never_imports_pygame(package: str) -> None:
     """Following module-level imports from the package (what importing it runs, its parent

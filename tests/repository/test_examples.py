@@ -56,6 +56,7 @@ def test_obstacle_avoidance_stops_short_of_the_wall() -> None:
     assert outcome.collisions == 0
 
 
+@pytest.mark.slow
 def test_the_particle_cloud_example_shows_a_cloud_that_grows_around_the_truth() -> None:
     """dead_reckoning_particles.py, run as the localization page says: one show of its
     2,000 particles a move, the cloud spreading as moves add up, its mean near the truth."""

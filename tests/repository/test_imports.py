@@ -43,12 +43,14 @@ def drawing_modules(code: str, cwd: Path) -> list[str]:
     return found
 
 
+@pytest.mark.slow
 def test_the_headless_packages_import_no_pygame(tmp_path: Path) -> None:
     code = "import simmer.view, simmer.world, simmer.devices, simmer.sweep, simmer.record\n"
     code += "import simmer.colors, simmer.serve, simmer.cli\n"
     assert drawing_modules(code, tmp_path) == []
 
 
+@pytest.mark.slow
 def test_a_sweep_keeping_failures_without_videos_imports_no_pygame(tmp_path: Path) -> None:
     """Both kinds of run: a policy through :func:`run_sweep` (on threads, so its runs are in
     this interpreter) and a program run by the worker's own function."""
@@ -75,6 +77,7 @@ assert all(r.success for r in results), results
     assert drawing_modules(code, tmp_path) == []
 
 
+@pytest.mark.slow
 def test_a_headless_recorded_run_and_its_plots_import_no_pygame(tmp_path: Path) -> None:
     """A project run (its plots draw the zones in the window's colours) recorded from the
     command line, then plotted."""
@@ -120,6 +123,7 @@ def imported(path: Path) -> set[str]:
     return names
 
 
+@pytest.mark.slow
 def test_only_the_window_imports_pygame_and_the_view_never_imports_the_window() -> None:
     for path in sorted(SRC.rglob("*.py")):
         part = path.relative_to(SRC).parts[0]

@@ -42,7 +42,7 @@ def fake_repo(tmp_path: Path, script: str) -> tuple[Path, Path]:
     [
         ("run.sh", ["python3 scripts/setup.py", "simmer run --speed 2"]),
         ("test.sh", ["python3 scripts/setup.py --test", "ruff check .", "ruff format --check .",
-                     "mypy", "pytest --speed 2"]),
+                     "mypy", "pytest -m  --speed 2"]),
     ],
 )  # fmt: skip
 def test_scripts_set_up_then_work(tmp_path: Path, script: str, expected: list[str]) -> None:

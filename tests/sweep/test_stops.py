@@ -165,6 +165,7 @@ def resume_the_rest(folder: Path, runs: int) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
     sweep_folder: Path, signum: int
@@ -183,6 +184,7 @@ def test_a_signalled_sweep_stops_everything_keeps_results_and_resumes(
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGHUP])
 def test_a_signal_to_the_sweeps_process_group_stops_every_program(
     sweep_folder: Path, signum: int
@@ -200,6 +202,7 @@ def test_a_signal_to_the_sweeps_process_group_stops_every_program(
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 def test_a_stopped_sweep_starts_none_of_its_queued_runs(sweep_folder: Path) -> None:
     """Six runs on two workers: when the sweep stops, two runs are queued behind the two in
     progress; a worker that took one after the stop ran it to its wall limit (600 s here)."""
@@ -223,6 +226,7 @@ def test_the_workers_of_a_killed_sweep_exit_with_their_programs(sweep_folder: Pa
     assert_all_gone(sweep, below, sweep_folder)
 
 
+@pytest.mark.slow
 def test_a_run_stops_the_children_its_program_detached(tmp_path: Path) -> None:
     program = tmp_path / "detach.py"
     program.write_text(

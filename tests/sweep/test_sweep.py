@@ -116,6 +116,7 @@ def test_a_grid_value_or_key_no_run_could_use_stops_the_sweep_before_it_starts(
         assert not (tmp_path / "out").exists()  # nothing ran, nothing was written
 
 
+@pytest.mark.slow
 def test_a_drawn_value_that_does_not_validate_is_an_invalid_run(tmp_path: Path) -> None:
     sample = {"count": 6, NOISE: {"choice": [0.0, "lots"]}}  # typical (first) value: valid
     spec = policy_sweep(tmp_path, "drive_and_stop", sample=sample)
@@ -481,6 +482,7 @@ def test_failures_are_kept_with_frames_and_the_first_are_filmed(tmp_path: Path) 
     assert (again.ran, again.filmed) == (0, 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("keep", ["all", "nothing"])
 def test_keep_all_or_nothing(tmp_path: Path, keep: str) -> None:
     spec = policy_sweep(tmp_path, "drive_and_stop", seeds=2, success="path_length > 10", keep=keep)
@@ -543,6 +545,7 @@ def test_the_wall_limit_stops_a_policy_in_a_thread_too(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 def test_resume_after_ctrl_c_runs_only_the_missing_runs(tmp_path: Path) -> None:
     shutil.copy(POLICIES, tmp_path)
     sweep = tmp_path / "sweep.toml"

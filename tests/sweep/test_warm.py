@@ -33,6 +33,7 @@ SEEDS = [0, 1, 2]
 NOISE = (("drives.w0.error.y", 0.05), ("drives.r0.error.rotation", 0.02), ("sensors.*.error", 0.05))
 
 
+@pytest.mark.slow
 def test_reset_with_a_seed_starts_as_a_new_simulation_with_that_seed() -> None:
     config = noisy_config()
 
@@ -79,6 +80,7 @@ def comparable(run: RunSpec, result: RunResult) -> tuple[list[str], dict[str, by
     return cells, files
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["policy", "program"])
 def test_a_warm_run_is_the_fresh_run_for_every_seed_in_either_order(
     tmp_path: Path, kind: str

@@ -96,6 +96,7 @@ def good_client_served(link: Transports) -> None:
         assert read_frame(sock) == [pytest.approx(3.5)]
 
 
+@pytest.mark.slow
 def test_fuzz_persistent_protocol() -> None:
     rng = random.Random(SEED)
     with serving(speed=None) as (_, link):
@@ -116,6 +117,7 @@ def test_fuzz_persistent_protocol() -> None:
         good_client_served(link)
 
 
+@pytest.mark.slow
 def test_fuzz_two_port_scheme() -> None:
     rng = random.Random(SEED + 1)
     with serving(speed=None) as (_, link):
@@ -139,6 +141,7 @@ def test_fuzz_two_port_scheme() -> None:
         good_client_served(link)
 
 
+@pytest.mark.slow
 def test_fuzz_serial_port() -> None:
     rng = random.Random(SEED + 2)
     with serving(speed=None, serial=True, silence=LONG_SILENCE) as (_, link):

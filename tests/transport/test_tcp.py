@@ -246,6 +246,7 @@ def test_fifty_clients_at_once_each_get_their_own_reply() -> None:
     assert len(results) == 50
 
 
+@pytest.mark.slow
 def test_stream_client_that_sends_much_before_reading_gets_every_reply_in_order() -> None:
     count = 20000
     with serving() as (_, link), stream(link.stream.port) as sock:
@@ -322,6 +323,7 @@ def test_a_persistent_connection_idle_between_messages_is_closed_after_idle_time
     assert "0.05 s between messages (idle_timeout)" in caplog.text
 
 
+@pytest.mark.slow
 def test_unclaimed_replies_expire(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.INFO, logger="simmer.transport")
     with serving(quick_sim(timeout=1.0)) as (_, link):
@@ -350,6 +352,7 @@ def test_packed_replies_nobody_collects_keep_only_the_first_as_v1_1_did(
             assert back.recv(64) == b""
 
 
+@pytest.mark.slow
 def test_framed_replies_nobody_collects_are_bounded(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.WARNING, logger="simmer.transport")
     framed = make_sim(default_data() | {"protocol": "framed", "str_encoding": "ascii"})
@@ -401,6 +404,7 @@ def test_out_of_descriptors_backs_off_logs_once_and_recovers(tmp_path: Path) -> 
     assert "accept failed" not in log
 
 
+@pytest.mark.slow
 def test_connections_that_never_send_a_complete_message_are_closed() -> None:
     with serving(quick_sim(timeout=1.0)) as (_, link):
         silent = stream(link.stream.port)

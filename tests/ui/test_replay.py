@@ -129,6 +129,7 @@ def test_the_replay_of_a_recorded_noisy_run_matches_its_trace(
     assert not any(command.differs for command in recording.commands)
 
 
+@pytest.mark.slow
 def test_a_tampered_trace_cell_is_reported_at_its_time_and_column(copy: Path) -> None:
     path = copy / "trace.csv"
     lines = path.read_text().splitlines(keepends=True)
@@ -159,6 +160,7 @@ def test_a_tampered_trace_cell_is_reported_at_its_time_and_column(copy: Path) ->
     assert f"DIFFERS from the recording at {time:.3f} s in column y" in result.stderr
 
 
+@pytest.mark.slow
 def test_simmer_replay_check_says_a_run_matches(run_folder: Path) -> None:
     result = CliRunner().invoke(app, ["replay", "--check", str(run_folder)])
     assert result.exit_code == 0, result.output
@@ -392,6 +394,7 @@ def decoded_mp4(path: Path) -> tuple[int, int, int]:
         return frames, stream.width, stream.height
 
 
+@pytest.mark.slow
 def test_simmer_render_cuts_a_clip_of_the_time_asked_for(run_folder: Path, tmp_path: Path) -> None:
     clip = tmp_path / "clips" / "clip.mp4"  # its folder is made
     result = CliRunner().invoke(
@@ -412,6 +415,7 @@ def test_simmer_render_cuts_a_clip_of_the_time_asked_for(run_folder: Path, tmp_p
         assert image.size == (1576, 920)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("times", "message"),
     [
@@ -487,6 +491,7 @@ def test_a_run_cut_short_is_replayed_as_far_as_it_goes(copy: Path) -> None:
     assert "the run was cut short" in result.stderr
 
 
+@pytest.mark.slow
 def test_replay_without_a_screen_says_what_to_do_instead(run_folder: Path) -> None:
     """A replay nobody can see would play forever: with no screen (the dummy driver here) it
     stops at once and names the commands that work without one."""

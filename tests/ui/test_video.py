@@ -80,6 +80,7 @@ def decoded(path: Path) -> tuple[list[np.ndarray], av.video.stream.VideoStream, 
     return frames, stream, seconds
 
 
+@pytest.mark.slow
 def test_an_mp4_of_a_headless_run_plays_in_simulated_time(tmp_path: Path) -> None:
     path = tmp_path / "run.mp4"
     recorder, sim = drive_12_inches(path)  # as fast as it goes: the video keeps simulated time
@@ -112,6 +113,7 @@ def test_an_mp4_of_a_headless_run_plays_in_simulated_time(tmp_path: Path) -> Non
     assert off_by(frames[FPS], view, inside_robot(Pose(6.0, 36.0, 180.0)), fill) < 30
 
 
+@pytest.mark.slow
 def test_a_gif_of_the_same_run_has_every_frame_and_real_delays(tmp_path: Path) -> None:
     path = tmp_path / "run.gif"
     recorder, sim = drive_12_inches(path)
@@ -178,6 +180,7 @@ def test_the_window_and_the_video_draw_the_same_pixels() -> None:
     bridge.close()
 
 
+@pytest.mark.slow
 def test_a_video_is_made_without_any_display(tmp_path: Path) -> None:
     code = (
         "import sys; from simmer import Simulation; from simmer.ui.video import VideoRecorder\n"
@@ -251,6 +254,7 @@ def press(win: Window, key: int) -> None:
     win.bridge.sync()
 
 
+@pytest.mark.slow
 def test_v_starts_and_stops_a_video_and_the_hud_says_so(
     window: Window, tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -279,6 +283,7 @@ def test_v_starts_and_stops_a_video_and_the_hud_says_so(
     assert "V" in dict(HELP)
 
 
+@pytest.mark.slow
 def test_closing_the_window_finishes_its_video(tmp_path: Path) -> None:
     bridge = Bridge(Simulation.from_config())
     win = Window(bridge, save_dir=tmp_path)
@@ -342,6 +347,7 @@ def test_simmer_run_video_writes_a_decodable_file(tmp_path: Path) -> None:
     assert length == pytest.approx(31 / FPS)
 
 
+@pytest.mark.slow
 def test_simmer_run_refuses_a_video_it_cannot_write(tmp_path: Path) -> None:
     wrong = simmer_run("--seconds", "1", "--video", str(tmp_path / "out.avi"))
     assert wrong.returncode == 2
@@ -352,6 +358,7 @@ def test_simmer_run_refuses_a_video_it_cannot_write(tmp_path: Path) -> None:
     assert "no writable folder" in blocked.stderr
 
 
+@pytest.mark.slow
 def test_simmer_run_video_makes_its_folder(tmp_path: Path) -> None:
     path = tmp_path / "runs" / "task1.mp4"  # as the Lab 1 page has it, in a new folder
     done = simmer_run("--seconds", "0.2", "--video", str(path))
@@ -360,6 +367,7 @@ def test_simmer_run_video_makes_its_folder(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")
 def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:
     path = tmp_path / "stopped.mp4"
     command = [sys.executable, "-m", "simmer", "run", "--headless", "--video", str(path), *PORTS]

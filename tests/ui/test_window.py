@@ -253,6 +253,7 @@ def test_t_shows_and_hides_the_path_driven_so_far(window: Window) -> None:
     assert "T" in dict(HELP)
 
 
+@pytest.mark.slow
 def test_b_shows_and_hides_the_programs_belief(window: Window) -> None:
     sim = window.bridge.sim
     cloud = [[54.0 + i % 7, 18.0 + i % 5, 10.0 * i, 1.0] for i in range(200)]
@@ -280,6 +281,7 @@ def test_b_shows_and_hides_the_programs_belief(window: Window) -> None:
     assert "B" in dict(HELP)
 
 
+@pytest.mark.slow
 def test_drag_moves_the_robot(window: Window) -> None:
     sim = window.bridge.sim
     mouse(pygame.MOUSEBUTTONDOWN, window, 6, 42)
@@ -342,6 +344,7 @@ def test_the_window_shows_the_outcome_a_served_run_reports() -> None:
     assert not alone.observers
 
 
+@pytest.mark.slow
 def test_dragging_onto_a_wall_is_refused(window: Window) -> None:
     sim = window.bridge.sim
     start = sim.robot.pose

@@ -30,6 +30,7 @@ def quiet_default() -> Simulation:
     return Simulation(make_config(data), seed=3)
 
 
+@pytest.mark.slow
 def test_expected_equals_the_sensors_noise_free_readings_at_1000_random_poses() -> None:
     sim = quiet_default()
     kinds = {d.id: type(d).kind for d in sim.robot.sensors.values()}
@@ -81,6 +82,7 @@ def test_a_table_is_expected_at_its_grid_and_nan_in_solid_cells() -> None:
         parse_headings("0-360")
 
 
+@pytest.mark.slow
 def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
     runner = CliRunner()
     npz, csv = tmp_path / "t.npz", tmp_path / "t.csv"

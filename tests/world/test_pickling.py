@@ -41,6 +41,7 @@ def in_fresh_process(code: str, data: bytes, cwd: Path) -> str:
 # ----------------------------------------------------------------------------- plug-in kinds
 
 
+@pytest.mark.slow
 def test_a_plugin_module_has_the_same_name_in_every_process(tmp_path: Path) -> None:
     plugin = EXAMPLES / "devices" / "tof.py"
     code = (
@@ -57,6 +58,7 @@ def test_a_plugin_module_has_the_same_name_in_every_process(tmp_path: Path) -> N
     assert plugin_path("simmer.devices") is None
 
 
+@pytest.mark.slow
 def test_a_configuration_with_a_plugin_kind_runs_in_a_fresh_process(tmp_path: Path) -> None:
     config = load_config(EXAMPLES / "tof_rover.toml")
     expected = Simulation(config).command("t0")
@@ -69,6 +71,7 @@ def test_a_configuration_with_a_plugin_kind_runs_in_a_fresh_process(tmp_path: Pa
     assert expected == pytest.approx([38.0])
 
 
+@pytest.mark.slow
 def test_a_simulation_with_a_plugin_kind_continues_in_a_fresh_process(tmp_path: Path) -> None:
     sim = Simulation.from_config(EXAMPLES / "tof_rover.toml", seed=7)
     sim.command("w0-20")
@@ -83,6 +86,7 @@ def test_a_simulation_with_a_plugin_kind_continues_in_a_fresh_process(tmp_path: 
     assert in_fresh_process(code, data, tmp_path) == f"{tuple(sim.robot.pose)} {sim.command('t0')}"
 
 
+@pytest.mark.slow
 def test_a_moved_plugin_file_is_named_when_unpickling_fails(tmp_path: Path) -> None:
     plugin = tmp_path / "devices" / "tof.py"
     plugin.parent.mkdir()
@@ -104,6 +108,7 @@ def test_a_moved_plugin_file_is_named_when_unpickling_fails(tmp_path: Path) -> N
 # ----------------------------------------------------------------------------- SimMeR devices
 
 
+@pytest.mark.slow
 def test_a_configuration_with_a_simmer_style_device_runs_in_a_fresh_process(
     tmp_path: Path,
 ) -> None:
@@ -118,6 +123,7 @@ def test_a_configuration_with_a_simmer_style_device_runs_in_a_fresh_process(
     assert in_fresh_process(code, pickle.dumps(config), tmp_path) == str(expected)
 
 
+@pytest.mark.slow
 def test_a_simulation_with_a_simmer_style_device_keeps_its_state(tmp_path: Path) -> None:
     sim = Simulation.from_config(WITH_DEVICE)
     sim.step(12)
@@ -231,6 +237,7 @@ def test_the_cycle_finder_sees_a_cycle_through_a_lazy_import(tmp_path: Path) -> 
     assert find_cycle(module_graph(tmp_path, "pkg")) is None
 
 
+@pytest.mark.slow
 def test_simmer_modules_import_each_other_one_way_only() -> None:
     graph = module_graph(SRC, "simmer")
     assert "simmer.devices" in graph["simmer.compat.template"]  # the graph sees the imports
@@ -239,6 +246,7 @@ def test_simmer_modules_import_each_other_one_way_only() -> None:
     assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
 
 
+@pytest.mark.slow
 def test_the_builtin_kinds_are_imported_on_first_use(tmp_path: Path) -> None:
     code = (
         "import simmer.devices\n"

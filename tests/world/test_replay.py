@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from simmer import Simulation
 from simmer.world.events import (
     CollisionEndEvent,
@@ -43,6 +45,7 @@ def test_input_events_reproduce_a_noisy_run_bit_for_bit() -> None:
     assert result.sim.robot.pose == original.robot.pose
 
 
+@pytest.mark.slow
 def test_a_different_seed_is_reported_as_different_replies() -> None:
     recorded: list[Event] = []
     original = a_noisy_run(recorded)

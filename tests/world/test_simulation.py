@@ -81,10 +81,12 @@ def trace(sim: Simulation, steps: int = 1000) -> list[tuple[float, ...]]:
     return rows
 
 
+@pytest.mark.slow
 def test_same_seed_gives_identical_traces_with_all_noise_on() -> None:
     assert trace(make_sim(noisy_data(), seed=42)) == trace(make_sim(noisy_data(), seed=42))
 
 
+@pytest.mark.slow
 def test_different_seeds_give_different_traces() -> None:
     assert trace(make_sim(noisy_data(), seed=1)) != trace(make_sim(noisy_data(), seed=2))
 
@@ -168,6 +170,7 @@ def test_configuration_and_simulation_pickle_for_parallel_runs() -> None:
     assert copy.command("u0,u1,c0,i0,g0") == sim.command("u0,u1,c0,i0,g0")
 
 
+@pytest.mark.slow
 def test_the_simulation_core_never_imports_pygame() -> None:
     code = (
         "import sys, simmer, simmer.client, simmer.runner, simmer.transport, simmer.serve\n"
