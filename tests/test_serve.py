@@ -181,6 +181,7 @@ WHERE_CTRL_C_LANDS = {
 write (the trace flushes rows during the run; events.jsonl closes as the recording ends)."""
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("ctrl_c")
 @pytest.mark.parametrize("where", WHERE_CTRL_C_LANDS)
 def test_ctrl_c_landing_in_a_recording_write_leaves_it_whole(

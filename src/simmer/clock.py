@@ -104,6 +104,12 @@ class Clock(Protocol):
         """Answer the clock messages whose time has come."""
         ...
 
+    def finish(self, until: float | None) -> None:
+        """The run is stopping (its program exited, or a stop): take the steps the messages
+        already answered cost, but not past ``until``, so how a run ends never depends on
+        whether the loop had taken them before the stop came."""
+        ...
+
 
 class _Counted:
     """The byte count and the waits both clocks keep."""
@@ -172,6 +178,9 @@ class RealTimeClock(_Counted):
         """Always: the wall clock paces the steps."""
         return True
 
+    def finish(self, until: float | None) -> None:
+        """Nothing: in real time a message costs no simulated time."""
+
     def settle(self) -> None:
         """Answer each wait whose simulated time has passed with the simulated time."""
         if not self.waits:
@@ -238,6 +247,17 @@ class LockstepClock(_Counted):
     def due(self) -> bool:
         """Only while the simulation is behind the clock or an ``!idle`` wait."""
         return self.behind()
+
+    def finish(self, until: float | None) -> None:
+        """Step to the program's clock as the link delay of its last message set it; not
+        while a clock message waits (a thread of the program that was sleeping when it
+        exited: its sleep is not the run's to finish), nor past ``until``."""
+        sim = self.sim
+        if self.waits:
+            return
+        limit = math.inf if until is None else until - EPSILON
+        while (sim.steps + 1) * sim.dt <= self.time + EPSILON and sim.time < limit:
+            sim.step()
 
     def behind(self) -> bool:
         """Whether the simulation must step to catch up with the clock or a wait."""

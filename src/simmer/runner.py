@@ -368,6 +368,8 @@ class Runner:
             self.bus.answer_with(self.answer)
         try:
             self._run(on_frame, stop_event, until)
+            if stop_event is not None and stop_event.is_set():
+                self.clock.finish(until)
         finally:
             self.bus.answer_with(None)
             self.sim.own(None)

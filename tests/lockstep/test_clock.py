@@ -7,15 +7,18 @@ import hashlib
 import math
 import subprocess
 import sys
+import threading
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from link_support import run_program
 from simmer import Simulation
 from simmer.client import Client
+from simmer.clock import LockstepClock
 from simmer.lockstep import runs_python
-from simmer.runner import LocalLink
+from simmer.runner import LocalLink, Runner
 from simmer.serve import Served
 from simmer.world.events import CommandEvent, Event, StepEvent
 
@@ -34,28 +37,19 @@ def noisy_sim() -> Simulation:
 
 
 class Fingerprint:
-    """A hash of every command, reply and pose, with the simulated time of each, up to the
-    program's last message.
-
-    The step that message costs (the link delay) is owed when its reply goes out; the program
-    may exit and end the run before the loop takes it, and whether it does depends on how
-    busy the machine is (at a paced speed it is due a moment later), so the poses after the
-    last message are left out."""
+    """A hash of every command, reply and pose, with the simulated time of each."""
 
     def __init__(self, sim: Simulation) -> None:
         self.digest = hashlib.sha256()
-        self.poses: list[bytes] = []
-        """Poses since the last command: hashed when a command follows them."""
+        self.steps = 0
         sim.add_observer(self)
 
     def __call__(self, event: Event) -> None:
         if isinstance(event, CommandEvent):
-            for pose in self.poses:
-                self.digest.update(pose)
-            self.poses.clear()
             self.digest.update(repr((event.time, event.message, event.replies)).encode())
         elif isinstance(event, StepEvent):
-            self.poses.append(repr((event.time, tuple(event.pose))).encode())
+            self.steps += 1
+            self.digest.update(repr((event.time, tuple(event.pose))).encode())
 
     def hexdigest(self) -> str:
         return self.digest.hexdigest()
@@ -185,3 +179,38 @@ def test_a_program_that_is_not_python_is_told_so() -> None:
     )
     assert served.exit_status == 0
     assert any("does not look like a Python program" in line for line in said), said
+
+
+ASK_AND_EXIT = """\
+import socket
+
+robot = socket.create_connection(("127.0.0.1", 61202))
+robot.sendall(b"u0\\n")
+print(len(robot.recv(64)))
+robot.close()
+"""
+
+
+def test_a_program_that_exits_after_its_reply_still_pays_its_link_delay(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The step a message costs is owed once its reply goes out; a loop thread starved of CPU
+    until the program had exited and stopped the run never took it, so a run's last poses
+    depended on the machine's load. Here the loop is held back until the stop comes, as a
+    starved one is (``due`` says no), and the run still ends one step on."""
+    stops: list[threading.Event] = []
+    run, due = Runner.run, LockstepClock.due
+
+    def watched_run(
+        self: Runner, *args: Any, stop_event: threading.Event | None = None, **kw: Any
+    ) -> None:
+        stops.append(stop_event)
+        run(self, *args, stop_event=stop_event, **kw)
+
+    monkeypatch.setattr(Runner, "run", watched_run)
+    monkeypatch.setattr(LockstepClock, "due", lambda self: due(self) and stops[0].is_set())
+    program = tmp_path / "ask_and_exit.py"
+    program.write_text(ASK_AND_EXIT)
+    sim = Simulation.from_config()
+    lockstep_run(sim, f"{sys.executable} {program}", None, serial=False)
+    assert sim.steps == 1
