@@ -23,6 +23,8 @@ from simmer.record.trace import HELD_SECONDS, TRACE_RATE
 
 from helpers import wait_for
 
+pytestmark = pytest.mark.slow  # each kills a real recorded run (3.3-3.7 CPU s)
+
 LONG_SLEEPS = """\
 import os, sys
 from pathlib import Path
