@@ -115,3 +115,28 @@ def test_each_dispatcher_matches_the_kinds_of_message_once() -> None:
     for name in ("runner.py", "transport/tcp.py"):
         matches, elsewhere = _kind_dispatch(SRC / name)
         assert (matches, elsewhere) == (1, []), name
+
+
+def _blocking(path: Path) -> list[str]:
+    """Threads started, and waits for a reply with a timeout (a thread blocking on it), in
+    ``path``."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.Call) or not isinstance(node.func, ast.Attribute):
+            continue
+        thread = node.func.attr == "Thread" and ast.unparse(node.func.value) == "threading"
+        waits = node.func.attr == "result" and any(kw.arg == "timeout" for kw in node.keywords)
+        if thread or waits:
+            found.append(f"{node.lineno}: {ast.unparse(node)}")
+    return found
+
+
+def test_no_transport_blocks_a_thread_on_a_reply() -> None:
+    """Every transport is served by the loop thread (one concurrency model, issue 29): none
+    starts a thread of its own or waits on a reply."""
+    found = {
+        path.name: uses
+        for path in sorted((SRC / "transport").glob("*.py"))
+        if (uses := _blocking(path))
+    }
+    assert not found, f"serve it from the bus's loop (watch, call_later): {found}"

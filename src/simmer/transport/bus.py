@@ -25,7 +25,6 @@ import logging
 import os
 import queue
 import selectors
-import socket
 import threading
 import time
 import weakref
@@ -36,7 +35,7 @@ from simmer.errors import BusClosed
 from simmer.protocol import CommandText, Decoded
 
 if TYPE_CHECKING:
-    from _typeshed import FileDescriptorLike
+    from _typeshed import FileDescriptorLike, HasFileno
 
 log = logging.getLogger("simmer.transport")
 
@@ -360,7 +359,7 @@ class CommandBus:
 
     def watch(
         self,
-        sock: socket.socket,
+        sock: HasFileno,
         callback: Watcher,
         events: int,
         on_error: ErrorHandler | None = None,
@@ -403,7 +402,7 @@ class CommandBus:
             except Exception:
                 log.exception("a timer in the simulation loop failed")
 
-    def unwatch(self, sock: socket.socket) -> None:
+    def unwatch(self, sock: HasFileno) -> None:
         """Stop watching ``sock``; once this returns its callback is not running and won't run."""
         with self._watch_lock:
             if not self._closed:

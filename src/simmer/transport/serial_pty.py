@@ -7,31 +7,54 @@ one per command, with no framing. With SimMeR v1.2's framed text a message ends 
 closing character, as the v1.2 Arduino example reads it; text outside frames is ignored and the
 reply is one frame (``[u0:15.45]``) with no line ending, so a program reads until ``]``.
 
-A failure answering one message (no reply within ``timeout``, a codec that raises) is logged
-and the port goes on serving; a program that does not read its replies holds only this port's
-thread, which :meth:`SerialServer.close` still stops. The stable link is made only where nothing
-is, and removed only while it is still the one made here.
+The port is served by the loop thread, as the TCP transports are: the bus watches the
+pseudo-terminal, the 50 ms silence is a timer on the bus, and a reply is written when its
+message has been answered; no thread waits for a reply. Replies go out in the order the
+messages came. A failure answering one message (no reply within ``timeout``, a codec that
+raises) is logged and the port goes on serving; while a program does not read its replies,
+nothing more is read from it (the pseudo-terminal holds what it writes). The stable link is
+made only where nothing is, and removed only while it is still the one made here.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import logging
 import os
-import select
+import selectors
 import threading
-import time
 import tty
+from collections import deque
 from dataclasses import replace
 from pathlib import Path
 
 from simmer.errors import BusClosed, SimmerError
-from simmer.protocol import MAX_MESSAGE_BYTES, FramedCodec, PackedCodec, Refused, ReplyCodec
-from simmer.transport.bus import ByteCounter, CommandBus
+from simmer.protocol import (
+    MAX_MESSAGE_BYTES,
+    Decoded,
+    FramedCodec,
+    PackedCodec,
+    Refused,
+    ReplyCodec,
+)
+from simmer.transport.bus import ByteCounter, CommandBus, Reply, Timer
 
 log = logging.getLogger("simmer.transport")
 
 SILENCE = 0.05
 """Seconds of silence that end a command without a newline (the Arduino sketch's rule)."""
+
+
+class _Owed:
+    """A message whose reply is still to be written, and its ``timeout`` timer."""
+
+    __slots__ = ("decoded", "future", "timer")
+
+    def __init__(self, decoded: Decoded, future: Reply[list[float]]) -> None:
+        self.decoded = decoded
+        self.future = future
+        self.timer: Timer | None = None
 
 
 class SerialServer:
@@ -69,10 +92,18 @@ class SerialServer:
         self.path = os.ttyname(self._slave)
         self.link = Path(link) if link is not None else None
         self.client = f"serial {self.path}"
-        self._wake_r, self._wake_w = os.pipe()
+        self._port = io.FileIO(self._master, "r+", closefd=False)
+        """The master side as something the bus's selector can watch."""
+        self._buffer = bytearray()
+        self._outbox = bytearray()
+        self._owed: deque[_Owed] = deque()
+        self._quiet: Timer | None = None
+        self._serving = threading.RLock()
+        """Held while a callback or :meth:`close` uses the port (a reply may complete in
+        the thread closing the bus)."""
         self._stopping = threading.Event()
+        self._events = 0
         self._failures = 0
-        self._thread = threading.Thread(target=self._loop, name="simmer-serial", daemon=True)
         if self.link is not None:
             try:
                 self._make_link(self.link)
@@ -106,39 +137,69 @@ class SerialServer:
             return False
 
     def start(self) -> None:
-        """Start serving."""
+        """Start serving (the loop must be running to serve it)."""
         self.bus.connect(self.client, self.kind)
-        self._thread.start()
+        self._update()
 
-    def _loop(self) -> None:
-        buffer = bytearray()
-        last = time.monotonic()
-        silence = self._frame is None  # framed messages end at the frame's end, never by time
+    def _update(self) -> None:
+        """Watch for what the port needs now: writability while a reply waits to be written,
+        readability once every message read has been answered (one message at a time, as the
+        Arduino is driven, and a program that does not read its replies holds nothing more),
+        else nothing."""
+        if self._outbox:
+            events = selectors.EVENT_WRITE
+        else:
+            events = 0 if self._owed else selectors.EVENT_READ
+        if events == self._events or self._stopping.is_set():
+            return
+        self._events = events
+        with contextlib.suppress(BusClosed):  # the simulation has stopped: nothing to do
+            if events:
+                self.bus.watch(self._port, self._ready, events, self._failed)
+            else:
+                self.bus.unwatch(self._port)
+
+    def _failed(self, exc: Exception) -> None:
+        if not self._stopping.is_set():
+            log.error("serial port %s stopped: %s", self.path, exc)
+
+    def _ready(self, events: int) -> bool:
+        """Loop thread: write what waits, or read what came and answer what it completes."""
+        with self._serving:
+            if self._stopping.is_set():
+                return False
+            if events & selectors.EVENT_WRITE:
+                self._flush()
+            elif events & selectors.EVENT_READ:
+                self._read()
+            self._update()
+            return True
+
+    def _read(self) -> None:
         try:
-            while True:
-                waiting = buffer and silence
-                wait = max(0.0, last + self.silence - time.monotonic()) if waiting else None
-                readable, _, _ = select.select([self._master, self._wake_r], [], [], wait)
-                if self._wake_r in readable:
-                    return
-                if not readable:  # silence: what we have is a command
-                    self._answer(bytes(buffer), len(buffer))
-                    buffer.clear()
-                    continue
-                try:
-                    chunk = os.read(self._master, 65536)
-                except BlockingIOError:
-                    continue
-                buffer += chunk
-                last = time.monotonic()
-                self._split(buffer)
-                if len(buffer) > MAX_MESSAGE_BYTES:
-                    self._answer(bytes(buffer), len(buffer))
-                    buffer.clear()
-                self.received += len(chunk)  # counted once handled: a test waits on it
-        except (BusClosed, OSError) as exc:
-            if not self._stopping.is_set():
-                log.error("serial port %s stopped: %s", self.path, exc)
+            chunk = os.read(self._master, 65536)
+        except BlockingIOError:
+            return
+        buffer = self._buffer
+        buffer += chunk
+        self._split(buffer)
+        if len(buffer) > MAX_MESSAGE_BYTES:
+            self._answer(bytes(buffer), len(buffer))
+            buffer.clear()
+        if buffer and self._frame is None:  # framed messages end at the frame's end only
+            if self._quiet is not None:
+                self._quiet.cancel()
+            self._quiet = self.bus.call_later(self.silence, self._silent)
+        self.received += len(chunk)  # counted once handled: a test waits on it
+
+    def _silent(self) -> None:
+        """Loop thread: the silence that ends a command without a newline has passed."""
+        with self._serving:
+            self._quiet = None
+            if self._buffer and not self._stopping.is_set():
+                self._answer(bytes(self._buffer), len(self._buffer))
+                self._buffer.clear()
+                self._update()
 
     def _split(self, buffer: bytearray) -> None:
         """Answer every complete message at the front of ``buffer`` and remove it."""
@@ -165,54 +226,84 @@ class SerialServer:
             self.bus.interrupt()
 
     def _answer(self, data: bytes, size: int) -> None:
-        """Answer one message, read from ``size`` bytes of the port; a failure is logged (the
-        first in full) and serving goes on. Only the port closing or the loop stopping ends
-        the thread."""
+        """Ask for one message, read from ``size`` bytes of the port, to be answered; its
+        reply is written once it and every message before it are answered. A failure is
+        logged (the first in full) and serving goes on."""
         try:
             decoded = replace(self.codec.decode(data), size=size)
-            if isinstance(decoded, Refused) and decoded.count == 0:  # nothing to send back
-                log.warning("%s: %s", self.client, decoded.error)
-                self._set_aside(size)
-                return
-            replies = self.bus.submit(decoded, self.client).result(timeout=self.timeout)
-            self._write(self.codec.encode(decoded, replies))
-        except TimeoutError:
-            log.warning(
-                "%s: no reply within %g s; the message is dropped", self.client, self.timeout
-            )
-        except (BusClosed, OSError):
-            raise
         except Exception as exc:
-            self._failures += 1
-            if self._failures == 1:
-                log.error(
-                    "%s: answering a message failed; the port goes on serving (more failures "
-                    "are counted, not logged): %s",
-                    self.client,
-                    exc,
-                    exc_info=exc,
-                )
+            self._failure(exc)
+            return
+        if isinstance(decoded, Refused) and decoded.count == 0:  # nothing to send back
+            log.warning("%s: %s", self.client, decoded.error)
+            self._set_aside(size)
+            return
+        owed = _Owed(decoded, self.bus.request(decoded, self.client, now=True).future)
+        self._owed.append(owed)
+        if not owed.future.done():
+            owed.timer = self.bus.call_later(self.timeout, lambda: self._expire(owed))
+            owed.future.add_done_callback(lambda _future: self._send_answered())
+        self._send_answered()
 
-    def _write(self, data: bytes) -> None:
-        """Write all of ``data``, waiting while the pseudo-terminal is full (nobody reads);
-        give up if the server is closing."""
-        reply = memoryview(data)
-        while reply:
-            try:
-                reply = reply[os.write(self._master, reply) :]
-            except BlockingIOError:
-                readable, _, _ = select.select([self._wake_r], [self._master], [])
-                if self._wake_r in readable:
-                    return
+    def _expire(self, owed: _Owed) -> None:
+        """Loop thread: no reply within ``timeout``; drop the message, send what follows."""
+        with self._serving:
+            if owed in self._owed and not owed.future.done():
+                self._owed.remove(owed)
+                log.warning(
+                    "%s: no reply within %g s; the message is dropped", self.client, self.timeout
+                )
+                self._send_answered()
+
+    def _send_answered(self) -> None:
+        """Write the replies of the answered messages at the front, in order."""
+        with self._serving:
+            while self._owed and self._owed[0].future.done() and not self._stopping.is_set():
+                owed = self._owed.popleft()
+                if owed.timer is not None:
+                    owed.timer.cancel()
+                if owed.future.exception() is not None:
+                    continue  # the simulation stopped
+                try:
+                    self._outbox += self.codec.encode(owed.decoded, owed.future.result())
+                except Exception as exc:
+                    self._failure(exc)
+            if self._outbox and not self._stopping.is_set():
+                self._flush()
+            self._update()
+
+    def _failure(self, exc: Exception) -> None:
+        """Count a message that could not be answered; log the first in full."""
+        self._failures += 1
+        if self._failures == 1:
+            log.error(
+                "%s: answering a message failed; the port goes on serving (more failures "
+                "are counted, not logged): %s",
+                self.client,
+                exc,
+                exc_info=exc,
+            )
+
+    def _flush(self) -> None:
+        """Write as much of the waiting replies as the pseudo-terminal takes now."""
+        try:
+            written = os.write(self._master, self._outbox)
+        except BlockingIOError:
+            return
+        del self._outbox[:written]
 
     def close(self) -> None:
         """Stop serving, remove the link and close the pseudo-terminal."""
         if self._stopping.is_set():
             return
         self._stopping.set()
-        os.write(self._wake_w, b"x")
-        if self._thread.is_alive():
-            self._thread.join(timeout=2.0)
+        self.bus.unwatch(self._port)
+        with self._serving:
+            if self._quiet is not None:
+                self._quiet.cancel()
+            for owed in self._owed:
+                if owed.timer is not None:
+                    owed.timer.cancel()
         self.bus.disconnect(self.client)
         if self._failures > 1:
             log.error("%s: %d messages could not be answered", self.client, self._failures)
@@ -221,7 +312,8 @@ class SerialServer:
         self._close_fds()
 
     def _close_fds(self) -> None:
-        for fd in (self._master, self._slave, self._wake_r, self._wake_w):
+        self._port.close()
+        for fd in (self._master, self._slave):
             os.close(fd)
 
     def __enter__(self) -> SerialServer:
