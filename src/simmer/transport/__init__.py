@@ -1,8 +1,9 @@
 """How control programs reach the simulation: SimMeR's two-port scheme, the persistent
-stream protocol and a virtual serial port. Everything goes through the :class:`CommandBus`; the
-loop (:mod:`simmer.runner`) owns the simulation and also drives the TCP sockets (non-blocking,
-watched through the bus), while the serial port has a thread that only reads, decodes and
-queues. :class:`Transports` starts the transports a run asks for."""
+stream protocol and a virtual serial port. Everything goes through the :class:`CommandBus` (a
+:class:`~simmer.transport.loop.SelectorLoop` and a
+:class:`~simmer.transport.request_queue.RequestQueue`); the loop (:mod:`simmer.runner`) owns
+the simulation and also drives the TCP sockets and the serial port (non-blocking, watched
+through the bus). :class:`Transports` starts the transports a run asks for."""
 
 from simmer.ports import STREAM_PORT
 from simmer.transport.bus import CommandBus, Request
