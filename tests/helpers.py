@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import copy
+import os
 import re
+import subprocess
+import sys
 import threading
 import time
 import tomllib
@@ -156,3 +159,26 @@ def peak_memory(call: Callable[[], T]) -> tuple[T, int]:
     finally:
         tracemalloc.stop()
     return result, peak
+
+
+FREE_PORTS = ["--port", "0", "--port-rx", "0", "--port-tx", "0"]
+"""``simmer run`` on ports the system picks, so tests never meet another simulator."""
+
+
+def run_simmer(
+    *args: str | Path, cwd: Path | None = None, timeout: float = 240
+) -> subprocess.CompletedProcess[str]:
+    """``simmer ARGS`` as a process of its own, without a display; its output as UTF-8 text
+    (bytes that are not UTF-8 kept as escapes, so a test can still read them)."""
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run(
+        [sys.executable, "-m", "simmer", *map(str, args)],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
+        errors="backslashreplace",
+        timeout=timeout,
+        check=False,
+    )

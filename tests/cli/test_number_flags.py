@@ -4,8 +4,6 @@ flag and its limit (``--seconds nan`` ran no step and reported success; ``--head
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -13,24 +11,12 @@ from typer.testing import CliRunner
 
 from simmer.cli import app
 
-PORTS = ["--port", "0", "--port-rx", "0", "--port-tx", "0"]
-
-
-def simmer(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    """``simmer ARGS`` in a process of its own."""
-    return subprocess.run(
-        [sys.executable, "-m", "simmer", *args],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+from helpers import FREE_PORTS, run_simmer
 
 
 @pytest.mark.parametrize("value", ["-1", "nan", "inf", "1e308", "0"])
 def test_seconds_must_be_a_positive_finite_number(tmp_path: Path, value: str) -> None:
-    done = simmer("run", "--headless", "--seconds", value, *PORTS, cwd=tmp_path)
+    done = run_simmer("run", "--headless", "--seconds", value, *FREE_PORTS, cwd=tmp_path)
     assert done.returncode == 2
     assert "--seconds" in done.stderr
     assert "MAX_SIMULATED_SECONDS" in done.stderr
@@ -51,7 +37,7 @@ def test_seconds_must_be_a_positive_finite_number(tmp_path: Path, value: str) ->
     ],
 )
 def test_run_flags_are_finite_and_bounded(flag: str, value: str, limit: str) -> None:
-    result = CliRunner().invoke(app, ["run", "--headless", flag, value, *PORTS])
+    result = CliRunner().invoke(app, ["run", "--headless", flag, value, *FREE_PORTS])
     assert result.exit_code == 2
     assert limit in result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)
@@ -76,7 +62,9 @@ def test_sweep_workers_are_bounded(tmp_path: Path, value: str) -> None:
 def test_table_ranges_are_checked_before_arithmetic(
     tmp_path: Path, headings: str, step: str, said: str
 ) -> None:
-    done = simmer("table", f"--headings={headings}", f"--step={step}", "-o", "t.npz", cwd=tmp_path)
+    done = run_simmer(
+        "table", f"--headings={headings}", f"--step={step}", "-o", "t.npz", cwd=tmp_path
+    )
     assert done.returncode == 1
     assert said in done.stderr
     assert "Traceback" not in done.stderr

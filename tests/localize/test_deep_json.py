@@ -23,27 +23,24 @@ from simmer.localize.belief import SHOWS_PER_SECOND
 from simmer.runner import LOG_LINES_PER_SECOND
 from simmer.untrusted import MAX_JSON_DEPTH
 
+from helpers import FREE_PORTS, run_simmer
+
+DISPLAYLESS = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+
 pytestmark = pytest.mark.timeout(300)
 
 DEEP = "[" * 3000
-ENV = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-PORTS = ["--port", "0", "--port-rx", "0", "--port-tx", "0"]
-
-
-def simmer(*args: str) -> subprocess.CompletedProcess[str]:
-    command = [sys.executable, "-m", "simmer", *args]
-    return subprocess.run(
-        command, check=False, capture_output=True, text=True, timeout=120, env=ENV
-    )
 
 
 @pytest.mark.slow
 def test_deep_shows_are_answered_and_their_log_lines_bounded(tmp_path: Path) -> None:
     log = tmp_path / "simmer.log"
-    command = [sys.executable, "-m", "simmer", "run", "--headless", "--speed", "max", *PORTS]
+    command = [sys.executable, "-m", "simmer", "run", "--headless", "--speed", "max", *FREE_PORTS]
     with (
         log.open("w") as err,
-        subprocess.Popen(command, stdout=subprocess.PIPE, stderr=err, text=True, env=ENV) as server,
+        subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=err, text=True, env=DISPLAYLESS
+        ) as server,
     ):
         try:
             assert server.stdout is not None
@@ -90,8 +87,8 @@ def record(tmp_path: Path) -> Path:
         encoding="utf-8",
     )
     folder = tmp_path / "run"
-    run = simmer(
-        "run", "--headless", *PORTS, "--seconds", "1", "--program",
+    run = run_simmer(
+        "run", "--headless", *FREE_PORTS, "--seconds", "1", "--program",
         f"{sys.executable} {program}", "--record", str(folder),
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
@@ -117,7 +114,7 @@ def test_a_deep_belief_in_a_recording_is_one_plain_line(tmp_path: Path) -> None:
     folder = record(tmp_path)
     rewrite_events(folder, "belief")
     for command in (["replay", "--check"], ["render"]):
-        done = simmer(*command, str(folder))
+        done = run_simmer(*command, str(folder))
         assert done.returncode == 0, done.stderr
         assert "Traceback" not in done.stderr
         said = [line for line in done.stderr.splitlines() if "MAX_JSON_DEPTH" in line]
@@ -127,7 +124,7 @@ def test_a_deep_belief_in_a_recording_is_one_plain_line(tmp_path: Path) -> None:
 
     rewrite_events(folder, "line")
     for command in (["replay", "--check"], ["render", "-o", str(tmp_path / "clip.mp4")]):
-        done = simmer(*command, str(folder))
+        done = run_simmer(*command, str(folder))
         assert done.returncode != 0
         assert "Traceback" not in done.stderr
         lines = [line for line in done.stderr.splitlines() if line.strip()]

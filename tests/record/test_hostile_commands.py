@@ -11,7 +11,6 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -19,9 +18,10 @@ import pytest
 from simmer.record.plots import MAX_SHOWN_CHARS, _title, read_run
 from simmer.record.runfolder import MAX_REPORT_CHARS, MAX_SOURCE_CHARS
 
+from helpers import run_simmer
+
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
-SIMMER = Path(sys.executable).with_name("simmer")
 DEVICE = """\
 from pathlib import Path
 Path(__file__).resolve().parent.parent.joinpath("MARKER").write_text("the device file ran")
@@ -48,20 +48,6 @@ REFUSING = {"replay --check", "replay", "render"}
 """The commands that re-simulate the run, so must refuse a configuration naming code."""
 
 
-def simmer(*args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
-    """``simmer ARGS`` as a new process, without a display."""
-    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    return subprocess.run(
-        [SIMMER, *map(str, args)],
-        cwd=cwd,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=240,
-        check=False,
-    )
-
-
 def one_plain_line(done: subprocess.CompletedProcess[str], *words: str) -> str:
     """Exit status 1, no traceback, and one line on stderr holding ``words``."""
     assert done.returncode == 1, (done.stdout, done.stderr)
@@ -77,7 +63,7 @@ def one_plain_line(done: subprocess.CompletedProcess[str], *words: str) -> str:
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A real run: ``simmer run --headless --seconds 2 --record``, a process of its own."""
     base = tmp_path_factory.mktemp("recorded")
-    done = simmer("run", *HEADLESS, "--seconds", "2", "--record", "run", cwd=base)
+    done = run_simmer("run", *HEADLESS, "--seconds", "2", "--record", "run", cwd=base)
     assert (base / "run" / "report.json").is_file(), done.stderr
     return base / "run"
 
@@ -127,7 +113,7 @@ def test_a_device_file_a_folder_names_is_never_imported_without_trust(
     folder: Path, command: str
 ) -> None:
     marker = name_a_device_file(folder)
-    done = simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    done = run_simmer(*COMMANDS[command], folder, cwd=folder.parent)
     assert not marker.exists()  # the class file's code never ran
     if command in REFUSING:
         line = one_plain_line(done, "manifest.json", "names code", "evil.py", "--trust")
@@ -140,7 +126,7 @@ def test_with_trust_the_device_file_runs(folder: Path) -> None:
     """The folder above is the real thing: trusted, its code runs (so the test above would
     see it run if it did)."""
     marker = name_a_device_file(folder)
-    done = simmer("replay", "--check", "--trust", folder, cwd=folder.parent)
+    done = run_simmer("replay", "--check", "--trust", folder, cwd=folder.parent)
     assert marker.exists(), done.stderr
     assert "Traceback" not in done.stderr  # it differs: e0 is a column the recording lacks
 
@@ -151,7 +137,7 @@ def test_a_kind_only_code_defines_is_code_too(folder: Path, command: str) -> Non
     sensor = next(d for d in manifest["config"]["devices"] if d["group"] == "sensors")
     sensor["params"]["type"] = "from_a_package"
     edit_manifest(folder, {"devices": manifest["config"]["devices"]})
-    done = simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    done = run_simmer(*COMMANDS[command], folder, cwd=folder.parent)
     if command in REFUSING:
         one_plain_line(done, "names code", "from_a_package", "--trust")
     else:
@@ -181,7 +167,7 @@ def test_nothing_is_written_through_a_link_in_the_folder(
     victim.write_bytes(VICTIM)
     (folder / name).unlink(missing_ok=True)
     (folder / name).symlink_to(victim)
-    done = simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    done = run_simmer(*COMMANDS[command], folder, cwd=folder.parent)
     assert victim.read_bytes() == VICTIM
     one_plain_line(done, name, "symbolic link", "move it away")
     assert (folder / name).is_symlink()  # left as it was
@@ -199,7 +185,7 @@ def test_a_symlink_in_place_of_every_file_changes_nothing_outside(
         (folder / name).unlink(missing_ok=True)
         (folder / name).symlink_to(victim)
         victims.append(victim)
-    simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    run_simmer(*COMMANDS[command], folder, cwd=folder.parent)
     assert [v.read_bytes() for v in victims] == [VICTIM] * len(victims)
 
 
@@ -213,7 +199,7 @@ def test_a_hard_link_in_the_folder_is_replaced_not_written_into(
     victim.write_bytes(VICTIM)
     (folder / name).unlink(missing_ok=True)
     os.link(victim, folder / name)
-    done = simmer(*COMMANDS[command], folder, cwd=folder.parent)
+    done = run_simmer(*COMMANDS[command], folder, cwd=folder.parent)
     assert done.returncode == 0, done.stderr
     assert victim.read_bytes() == VICTIM
     assert (folder / name).stat().st_ino != victim.stat().st_ino
@@ -223,14 +209,14 @@ def test_a_hard_link_in_the_folder_is_replaced_not_written_into(
 def test_a_pipe_at_a_file_name_is_refused_not_opened(folder: Path) -> None:
     (folder / "path.png").unlink(missing_ok=True)
     os.mkfifo(folder / "path.png")  # opening it to write would wait for ever for a reader
-    one_plain_line(simmer("plot", folder, cwd=folder.parent), "path.png", "a pipe")
+    one_plain_line(run_simmer("plot", folder, cwd=folder.parent), "path.png", "a pipe")
 
 
 def test_a_folder_that_is_a_link_is_not_written_into(folder: Path) -> None:
     link = folder.parent / "link"
     link.symlink_to(folder, target_is_directory=True)
     before = sorted(p.name for p in folder.iterdir())
-    one_plain_line(simmer("plot", link, cwd=folder.parent), "is a symbolic link", "own path")
+    one_plain_line(run_simmer("plot", link, cwd=folder.parent), "is a symbolic link", "own path")
     assert sorted(p.name for p in folder.iterdir()) == before
 
 
@@ -239,7 +225,7 @@ def test_a_recording_is_not_made_through_a_link(tmp_path: Path) -> None:
     victim.write_bytes(VICTIM)
     (tmp_path / "run").mkdir()
     (tmp_path / "run" / "events.jsonl").symlink_to(victim)
-    done = simmer("run", *HEADLESS, "--seconds", "1", "--record", "run", cwd=tmp_path)
+    done = run_simmer("run", *HEADLESS, "--seconds", "1", "--record", "run", cwd=tmp_path)
     one_plain_line(done, "events.jsonl", "symbolic link")
     assert victim.read_bytes() == VICTIM
 
@@ -253,7 +239,7 @@ def test_text_report_md_copies_from_the_manifest_stays_text(folder: Path) -> Non
     data["program"] = "python x.py`\n# Owned\n<img src=x onerror=alert(1)>\n" + "y" * 10_000
     data["config"]["source"] = "``robot.toml\r\n[link](http://evil)\u202e"
     path.write_text(json.dumps(data), encoding="utf-8")
-    done = simmer("plot", folder, cwd=folder.parent)
+    done = run_simmer("plot", folder, cwd=folder.parent)
     assert done.returncode == 0, done.stderr
     report = (folder / "report.md").read_text(encoding="utf-8")
     assert not any(line.startswith(("# Owned", "<img")) for line in report.split("\n"))
@@ -270,7 +256,7 @@ def test_a_long_configuration_name_is_drawn_short(folder: Path) -> None:
     run = read_run(folder)
     assert len(run.source) == MAX_SOURCE_CHARS
     assert len(_title(run)) < 200 + MAX_SHOWN_CHARS
-    done = simmer("plot", folder, cwd=folder.parent)
+    done = run_simmer("plot", folder, cwd=folder.parent)
     assert done.returncode == 0, done.stderr
     assert (folder / "report.md").stat().st_size < 10_000
 
@@ -284,6 +270,6 @@ def test_a_long_configuration_name_is_said_short_when_it_no_longer_loads(
     manifest["config"]["settings"]["ppi"] = -1  # so the configuration's name is in the message
     (folder / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
     line = one_plain_line(
-        simmer(*COMMANDS[command], folder, cwd=folder.parent), "no longer loads", "ppi"
+        run_simmer(*COMMANDS[command], folder, cwd=folder.parent), "no longer loads", "ppi"
     )
     assert len(line) < MAX_SOURCE_CHARS * 2 + 300  # every newline written as two characters

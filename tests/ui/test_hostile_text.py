@@ -5,12 +5,12 @@ lost its ``--video``, and made ``simmer render`` of the recording end in a trace
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from helpers import FREE_PORTS, run_simmer
 
 HOSTILE = ["\x00", "\ud800", "\u202e", "\ufeff", "\u200b"]
 
@@ -25,16 +25,6 @@ with connect() as robot:
 """Shows each hostile label alone and all together (the client writes a lone surrogate as
 its JSON escape), then lets a few frames be drawn."""
 
-ENV = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-PORTS = ["--port", "0", "--port-rx", "0", "--port-tx", "0"]
-
-
-def simmer(*args: str) -> subprocess.CompletedProcess[str]:
-    command = [sys.executable, "-m", "simmer", *args]
-    return subprocess.run(
-        command, check=False, capture_output=True, text=True, timeout=120, env=ENV
-    )
-
 
 @pytest.mark.slow
 def test_hostile_labels_are_drawn_in_the_window_the_video_and_a_rendered_clip(
@@ -43,8 +33,8 @@ def test_hostile_labels_are_drawn_in_the_window_the_video_and_a_rendered_clip(
     program = tmp_path / "labels.py"
     program.write_text(PROGRAM.format(labels=[*HOSTILE, "".join(HOSTILE)]), encoding="utf-8")
     video, folder = tmp_path / "run.mp4", tmp_path / "run"
-    run = simmer(
-        "run", *PORTS, "--seconds", "2", "--program", f"{sys.executable} {program}",
+    run = run_simmer(
+        "run", *FREE_PORTS, "--seconds", "2", "--program", f"{sys.executable} {program}",
         "--video", str(video), "--record", str(folder),
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
@@ -55,7 +45,7 @@ def test_hostile_labels_are_drawn_in_the_window_the_video_and_a_rendered_clip(
     assert "\\ud800" in (folder / "events.jsonl").read_text(encoding="utf-8")
 
     clip = tmp_path / "clip.mp4"
-    render = simmer("render", str(folder), "-o", str(clip))
+    render = run_simmer("render", str(folder), "-o", str(clip))
     assert render.returncode == 0, render.stderr
     assert "Traceback" not in render.stderr
     assert clip.stat().st_size > 0
