@@ -20,6 +20,7 @@ import json
 import re
 import unicodedata
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 MAX_DRAWN_CHARS = 200
@@ -108,3 +109,13 @@ def parse_json(
         return json.loads(text)
     except ValueError as exc:  # json.JSONDecodeError is a ValueError
         raise ValueError(f"{what} is not readable JSON: {exc}") from None
+
+
+def read_at_most(path: Path, limit: int, limit_name: str, then: str) -> bytes:
+    """The bytes of ``path``, read to at most ``limit`` (a file in a folder someone gave us
+    may be any size); past it a ValueError naming the file and the limit, ending in ``then``."""
+    with path.open("rb") as file:
+        data = file.read(limit + 1)
+    if len(data) > limit:
+        raise ValueError(f"{path} is larger than {limit:,} bytes ({limit_name}), {then}")
+    return data

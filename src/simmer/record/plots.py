@@ -47,7 +47,7 @@ from simmer.config.models import Settings
 from simmer.errors import PlotError, UnsafeOutput
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
 from simmer.record.safefile import check_target, replacing, write_text
-from simmer.untrusted import drawable, parse_json
+from simmer.untrusted import drawable, parse_json, read_at_most
 from simmer.world.localization import (
     HEADING_TOLERANCE,
     MAX_ERRORS,
@@ -549,13 +549,12 @@ def link_from_report(report: Path, images: Sequence[tuple[str, str]]) -> bool:
     if not report.is_file():
         return False
     check_target(report)  # a link is neither read nor written through
-    with report.open("rb") as file:
-        data = file.read(MAX_REPORT_BYTES + 1)
-    if len(data) > MAX_REPORT_BYTES:
-        raise ValueError(
-            f"{report} is larger than {MAX_REPORT_BYTES:,} bytes (MAX_REPORT_BYTES), more than "
-            "a report; move it away to have a new one written"
-        )
+    data = read_at_most(
+        report,
+        MAX_REPORT_BYTES,
+        "MAX_REPORT_BYTES",
+        "more than a report; move it away to have a new one written",
+    )
     text = data.decode("utf-8")
     missing = [(name, alt) for name, alt in images if f"]({name}" not in text]
     if not missing:

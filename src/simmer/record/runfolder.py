@@ -52,7 +52,7 @@ from simmer.record.eventlog import (
 )
 from simmer.record.safefile import check_target, write_text
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
-from simmer.untrusted import parse_json
+from simmer.untrusted import parse_json, read_at_most
 from simmer.world.events import Event
 from simmer.world.outcome import Outcome
 from simmer.world.replay import Replayed, replay
@@ -340,13 +340,9 @@ def manifest(sim: Simulation, options: RunOptions | None, started: datetime) -> 
 def read_json(path: Path) -> dict[str, Any]:
     """A JSON object SimMeR wrote (manifest.json, report.json), read at most
     :data:`MAX_JSON_BYTES`; ValueError naming the file if it is not one."""
-    with path.open("rb") as file:
-        text = file.read(MAX_JSON_BYTES + 1)
-    if len(text) > MAX_JSON_BYTES:
-        raise ValueError(
-            f"{path} is larger than {MAX_JSON_BYTES:,} bytes, more than SimMeR writes: "
-            "not a run's file"
-        )
+    text = read_at_most(
+        path, MAX_JSON_BYTES, "MAX_JSON_BYTES", "more than SimMeR writes: not a run's file"
+    )
     data = parse_json(text, str(path), MAX_JSON_BYTES, "MAX_JSON_BYTES")
     if not isinstance(data, dict):
         raise ValueError(f"{path} holds {type(data).__name__}, not a JSON object")
