@@ -89,6 +89,16 @@ def test_any_text_is_drawn_by_matplotlib_without_a_warning(text: str) -> None:
         fig.savefig(io.BytesIO(), format="png")
 
 
+def test_a_figures_line_breaks_stay_and_each_line_is_cleaned() -> None:
+    """Every plot's title has two lines; the sanitiser turned its line break into ``?``."""
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    title = fig.subplots().set_title("Path of the run in run\x00\n1.0 s \u202e driven")
+    drawable_texts(fig)
+    assert title.get_text() == "Path of the run in run?\n1.0 s ? driven"
+
+
 # ----------------------------------------------------------------------------- JSON
 
 

@@ -644,11 +644,14 @@ def _save(fig: Figure, target: Path) -> None:
 def drawable_texts(fig: Figure) -> None:
     """Pass every text of ``fig`` through :func:`~simmer.untrusted.drawable` and take it
     literally: titles, labels and legends hold a run folder's names and a program's text, and
-    a lone surrogate stopped matplotlib drawing, as did a ``$`` pair read as mathematics."""
+    a lone surrogate stopped matplotlib drawing, as did a ``$`` pair read as mathematics. A
+    line break stays one (matplotlib draws it; every plot's title has two lines), and each
+    line is cleaned and bounded on its own."""
     from matplotlib.text import Text
 
     for text in fig.findobj(Text):
-        text.set_text(drawable(text.get_text(), _has_glyph))
+        lines = text.get_text().split("\n")
+        text.set_text("\n".join(drawable(line, _has_glyph) for line in lines))
         text.set_parse_math(False)
 
 
