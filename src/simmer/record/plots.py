@@ -7,9 +7,9 @@ What is read from a run folder (through :mod:`simmer.record.reader`, for the eve
   seconds), ``x``, ``y`` (inches) and ``heading`` (degrees) are required; ``step`` and
   ``collisions`` are known and not plotted; every other column whose cells are numbers (or blank
   before a sensor's first reading) is a sensor, plotted under its header (its id, e.g. ``u0``).
-  Rows that do not parse (the half-written last line of a killed run), or whose pose is beyond
-  :data:`MAX_POSE_VALUE`, are skipped. A reset puts the simulated clock back to 0: where
-  ``time`` goes backwards a new part of the run begins.
+  A last line cut before its newline (a killed run's), rows that do not parse and rows whose
+  pose is beyond :data:`MAX_POSE_VALUE` are skipped. A reset puts the simulated clock back to
+  0: where ``time`` goes backwards a new part of the run begins.
 - ``events.jsonl`` (optional): one JSON object per line with ``type``, ``time`` and more.
   ``command`` events (``message``, ``replies``: numbers, or the strings "nan", "inf", "-inf")
   are numbered from 1 along the path; ``collision`` events are marked at their ``pose``
@@ -384,7 +384,8 @@ def _settings(path: Path, data: dict[str, Any]) -> Settings:
 def _read_events(path: Path, run: RecordedRun) -> None:
     """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``;
     PlotError for an event at a time no run of the limit reaches (:data:`MAX_RUN_SECONDS`
-    past the trace's end: a label there overflows the drawing)."""
+    past the trace's end: a label there overflows the drawing); RunFolderError if the file
+    cannot be read (:func:`read_run` says it as a PlotError)."""
     from simmer.record.runfolder import MAX_RUN_SECONDS
 
     latest = float(np.max(run.trace.time)) + MAX_RUN_SECONDS
