@@ -20,6 +20,7 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── BusClosed              the simulation loop has stopped
     ├── SweepError + ValueError     a sweep file SimMeR cannot run
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
+    ├── RunFolderError + ValueError a run folder's events or trace cannot be read
     └── FolderExists + ValueError   ``simmer new`` would write over files
 
     LimitReached (Exception)       a policy ran into its run's limit
@@ -28,7 +29,8 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ExitCalled (SystemExit)           ``os._exit`` called while ``simmer check`` runs a plug-in
 
 The ``ValueError`` second base is kept for the code that raised them as value errors (a
-sweep setting, a scenario cell and a destination folder are values the user gave).
+sweep setting, a scenario cell, a recording read back and a destination folder are values the
+user gave).
 """
 
 from __future__ import annotations
@@ -146,6 +148,13 @@ class ScenarioError(SimmerError, ValueError):
         super().__init__(f"{key}: {message}")
         self.key = key
         self.message = message
+
+
+class RunFolderError(SimmerError, ValueError):
+    """A run folder's ``events.jsonl`` or ``trace.csv`` cannot be read: unreadable, larger than
+    a recording holds, or not what SimMeR writes (the message names the file and, for an event,
+    its line). Raised only by :mod:`simmer.record.reader`; a plot or a replay says it as its
+    own :class:`PlotError` or :class:`ReplayError`."""
 
 
 class FolderExists(SimmerError, ValueError):

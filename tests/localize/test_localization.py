@@ -23,7 +23,7 @@ from simmer.client import Client, connect
 from simmer.geometry import Pose
 from simmer.localize.belief import MAX_PARTICLES, SHOWS_PER_SECOND, BeliefBoard, parse_belief
 from simmer.options import RunOptions
-from simmer.record.eventlog import read_events
+from simmer.record.reader import read_events
 from simmer.runner import LocalLink
 from simmer.serve import serve
 from simmer.world import Simulation

@@ -1,10 +1,12 @@
 """Keeping runs: a run folder with the manifest, events, trace and report of one run.
 
 See :mod:`simmer.record.runfolder` for the folder, :mod:`simmer.record.eventlog` for
-``events.jsonl`` and :mod:`simmer.record.trace` for ``trace.csv``.
+``events.jsonl`` and :mod:`simmer.record.trace` for ``trace.csv``, and
+:mod:`simmer.record.reader` for reading those two back.
 """
 
-from simmer.record.eventlog import EventLog, read_events
+from simmer.record.eventlog import EventLog
+from simmer.record.reader import read_events
 from simmer.record.runfolder import (
     LoadedRun,
     RunRecorder,

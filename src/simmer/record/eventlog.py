@@ -5,8 +5,9 @@ the event's fields under their own names, and ``type`` naming its class (:data:`
 A pose is ``[x, y, heading]``, held keys a sorted list. JSON has no NaN or infinity, and
 replies carry both (+inf: a drive accepted; NaN: a bad command, a busy drive), so a float
 that is not finite is the string ``"nan"``, ``"inf"`` or ``"-inf"``; every other float is
-written in the shortest form that reads back to the same bits. :func:`read_events` gives
-back the very events (what replay needs); any JSON reader reads the file.
+written in the shortest form that reads back to the same bits. :func:`event_from_dict` gives
+back the very event of a parsed line (what replay needs; :func:`simmer.record.reader.read_events`
+reads the file with it); any JSON reader reads the file.
 
 :class:`EventLog` writes each line with one unbuffered ``write``, so after Ctrl-C, a crash or
 ``kill -9`` the file holds every event up to the last, each line whole. It leaves out
@@ -31,7 +32,6 @@ from typing import Any, get_type_hints
 
 from simmer.geometry import Pose
 from simmer.options import MAX_RECORDING_BYTES
-from simmer.untrusted import parse_json
 from simmer.world.events import (
     BeliefEvent,
     CollisionEndEvent,
@@ -86,16 +86,6 @@ class RecordingBudget:
         return (
             f"it reached the size limit of {self.limit / 2**20:,.0f} MB "
             "(events.jsonl and trace.csv together; --record-limit MB raises it)"
-        )
-
-
-def check_size(path: Path) -> None:
-    """ValueError naming ``path`` if it is larger than a recording's files hold
-    (:data:`MAX_RECORDING_BYTES`): a reader refuses it rather than read it whole."""
-    size = path.stat().st_size
-    if size > MAX_RECORDING_BYTES:
-        raise ValueError(
-            f"{path} is {size:,} bytes, more than a recording holds ({MAX_RECORDING_BYTES:,})"
         )
 
 
@@ -219,47 +209,6 @@ def event_from_dict(data: dict[str, Any]) -> Event:
         return cls(**values)
     except (KeyError, TypeError, ValueError, OverflowError) as exc:  # a step of Infinity
         raise ValueError(f"not a {data['type']} event: {exc}") from None
-
-
-def read_events(path: str | Path, max_steps: int | None = None) -> list[Event]:
-    """Every event in an ``events.jsonl`` file, in order.
-
-    A last line cut off before its newline (the disk filled, the machine lost power) is left
-    out; any other line that is not an event is a ValueError naming its line number, as is an
-    event that would take a replay past ``max_steps`` steps (counted on across resets), and a
-    file larger than :data:`MAX_RECORDING_BYTES`.
-    """
-    path = Path(path)
-    check_size(path)
-    events: list[Event] = []
-    before = 0
-    """Steps of the parts of the run before the last reset."""
-    with path.open(encoding="utf-8", errors="strict") as file:
-        for number, line in enumerate(file, 1):
-            try:
-                event = event_from_dict(_object(parse_json(line, "the line")))
-                if event.step < 0:
-                    raise ValueError(f"step {event.step} is negative")
-            except ValueError as exc:
-                if not line.endswith("\n"):
-                    break
-                raise ValueError(f"{path} line {number}: {exc}") from None
-            if max_steps is not None and before + event.step > max_steps:
-                after = f" ({before + event.step:,} counting on across resets)" if before else ""
-                raise ValueError(
-                    f"{path} line {number}: step {event.step:,}{after} is beyond the replay "
-                    f"limit of {max_steps:,} steps (--max-seconds raises it)"
-                )
-            if isinstance(event, ResetEvent):
-                before += event.step
-            events.append(event)
-    return events
-
-
-def _object(value: Any) -> dict[str, Any]:
-    if not isinstance(value, dict):
-        raise ValueError(f"{type(value).__name__}, not a JSON object")
-    return value
 
 
 # ----------------------------------------------------------------------------- the observer

@@ -1,15 +1,15 @@
 """Plots of a recorded run: the path over the maze (``path.png``) and the sensor readings
 against time (``sensors.png``), in world inches with +y down the page as in the window.
 
-What is read from a run folder (the names are the constants below):
+What is read from a run folder (through :mod:`simmer.record.reader`, for the events and trace):
 
 - ``trace.csv``: a header row, then one row per trace sample. Columns ``time`` (simulated
   seconds), ``x``, ``y`` (inches) and ``heading`` (degrees) are required; ``step`` and
   ``collisions`` are known and not plotted; every other column whose cells are numbers (or blank
   before a sensor's first reading) is a sensor, plotted under its header (its id, e.g. ``u0``).
-  Rows that do not parse (the half-written last line of a killed run), or whose pose is beyond
-  :data:`MAX_POSE_VALUE`, are skipped. A reset puts the simulated clock back to 0: where
-  ``time`` goes backwards a new part of the run begins.
+  A last line cut before its newline (a killed run's), rows that do not parse and rows whose
+  pose is beyond :data:`MAX_POSE_VALUE` are skipped. A reset puts the simulated clock back to
+  0: where ``time`` goes backwards a new part of the run begins.
 - ``events.jsonl`` (optional): one JSON object per line with ``type``, ``time`` and more.
   ``command`` events (``message``, ``replies``: numbers, or the strings "nan", "inf", "-inf")
   are numbered from 1 along the path; ``collision`` events are marked at their ``pose``
@@ -28,11 +28,10 @@ Matplotlib (Agg backend, no pyplot) is imported only when a plot is drawn.
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 import re
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -44,10 +43,11 @@ from pydantic import ValidationError
 from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
-from simmer.errors import PlotError, UnsafeOutput
+from simmer.errors import PlotError, RunFolderError, UnsafeOutput
 from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.record.reader import EVENTS, TRACE, event_objects, read_trace
 from simmer.record.safefile import check_target, replacing, write_text
-from simmer.untrusted import drawable, parse_json, read_at_most
+from simmer.untrusted import drawable, read_at_most
 from simmer.world.localization import (
     HEADING_TOLERANCE,
     MAX_ERRORS,
@@ -62,8 +62,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("simmer.plot")
 
-TRACE_FILE = "trace.csv"
-EVENTS_FILE = "events.jsonl"
 MANIFEST_FILE = "manifest.json"
 REPORT_FILE = "report.md"
 PATH_IMAGE = "path.png"
@@ -254,29 +252,24 @@ def read_run(folder: str | Path) -> RecordedRun:
     folder = Path(folder)
     if not folder.is_dir():
         raise PlotError(f"{folder} is not a folder; give a run folder (simmer run --record DIR)")
-    if not (folder / TRACE_FILE).is_file():
+    if not (folder / TRACE).is_file():
         raise PlotError(
-            f"no {TRACE_FILE} in {folder}: not a run folder (record one with simmer run --record)"
+            f"no {TRACE} in {folder}: not a run folder (record one with simmer run --record)"
         )
-    trace = _read_trace(folder / TRACE_FILE)
-    run = _read_manifest(folder / MANIFEST_FILE, folder, trace)
-    if (folder / EVENTS_FILE).is_file():
-        _read_events(folder / EVENTS_FILE, run)
+    try:
+        trace = _read_trace(folder / TRACE)
+        run = _read_manifest(folder / MANIFEST_FILE, folder, trace)
+        if (folder / EVENTS).is_file():
+            _read_events(folder / EVENTS, run)
+    except RunFolderError as exc:  # the reader's one line, naming the file
+        raise PlotError(str(exc)) from None
     return run
 
 
 def _read_trace(path: Path) -> Trace:
     """The trace's columns; a new part wherever the clock goes back (a reset)."""
-    from simmer.record.eventlog import check_size
-
-    try:
-        check_size(path)
-        with path.open(newline="", encoding="utf-8") as file:
-            reader = csv.reader(file)
-            header = [name.strip() for name in next(reader, [])]
-            rows = list(reader)
-    except (OSError, ValueError, csv.Error) as exc:  # a UnicodeError is a ValueError
-        raise PlotError(f"cannot read {path}: {exc}") from None
+    table = read_trace(path)
+    header, rows = [name.strip() for name in table.header], table.rows
     missing = [name for name in TRACE_REQUIRED if name not in header]
     if missing:
         raise PlotError(f"{path} has no column {', '.join(missing)} (its header: {header})")
@@ -391,17 +384,13 @@ def _settings(path: Path, data: dict[str, Any]) -> Settings:
 def _read_events(path: Path, run: RecordedRun) -> None:
     """Add the commands, collisions and block reached that ``events.jsonl`` holds to ``run``;
     PlotError for an event at a time no run of the limit reaches (:data:`MAX_RUN_SECONDS`
-    past the trace's end: a label there overflows the drawing)."""
-    from simmer.record.eventlog import check_size
+    past the trace's end: a label there overflows the drawing); RunFolderError if the file
+    cannot be read (:func:`read_run` says it as a PlotError)."""
     from simmer.record.runfolder import MAX_RUN_SECONDS
 
-    try:
-        check_size(path)
-    except ValueError as exc:
-        raise PlotError(str(exc)) from None
     latest = float(np.max(run.trace.time)) + MAX_RUN_SECONDS
     part = 0
-    for number, event in _json_lines(path):
+    for number, event in event_objects(path):
         kind, time = event.get(EV_TYPE), _float(event.get(EV_TIME))
         if kind == EV_RESET:
             part += 1
@@ -430,20 +419,23 @@ def _read_events(path: Path, run: RecordedRun) -> None:
 def cut_short_of(folder: Path, trace: Trace | None) -> str | None:
     """What a run folder without a report (its run was killed) says about where it ends,
     its events and its ``trace`` compared (:func:`~simmer.record.tracecheck.cut_short`); None
-    if it has a report, or no events."""
+    if it has a report, or no events. PlotError if the events cannot be read."""
     from simmer.record.runfolder import REPORT_JSON
     from simmer.record.tracecheck import cut_short
 
-    events = folder / EVENTS_FILE
+    events = folder / EVENTS
     if (folder / REPORT_JSON).is_file() or not events.is_file():
         return None
     starts, times = [0.0], []  # when each part (reset) starts; each event's run time
-    for _, event in _json_lines(events):
-        time = _float(event.get(EV_TIME))
-        if math.isfinite(time):
-            times.append(starts[-1] + time)
-            if event.get(EV_TYPE) == EV_RESET:
-                starts.append(times[-1])
+    try:
+        for _, event in event_objects(events):
+            time = _float(event.get(EV_TIME))
+            if math.isfinite(time):
+                times.append(starts[-1] + time)
+                if event.get(EV_TYPE) == EV_RESET:
+                    starts.append(times[-1])
+    except RunFolderError as exc:
+        raise PlotError(str(exc)) from None
     if not times:
         return None
     if trace is None or not len(trace.time):
@@ -452,22 +444,6 @@ def cut_short_of(folder: Path, trace: Trace | None) -> str | None:
     end = (starts[part] if part < len(starts) else 0.0) + float(trace.time[-1])
     untraced = sum(time > end + 1e-9 for time in times)
     return f"{cut_short(max(times), end, untraced)}; the plots go to {end:.2f} s"
-
-
-def _json_lines(path: Path) -> Iterator[tuple[int, dict[str, Any]]]:
-    """The JSON objects of a JSON-lines file with their line numbers, skipping lines that are
-    not one."""
-    try:
-        with path.open(encoding="utf-8", errors="replace") as file:
-            for number, line in enumerate(file, 1):
-                try:
-                    value = parse_json(line, "an event")
-                except ValueError:
-                    continue
-                if isinstance(value, dict):
-                    yield number, value
-    except OSError as exc:
-        raise PlotError(f"cannot read {path}: {exc}") from None
 
 
 def _float(value: Any) -> float:

@@ -8,6 +8,7 @@
   :func:`load_run` rebuilds the configuration from it;
 - ``events.jsonl``, every event as it happens (:mod:`simmer.record.eventlog`);
 - ``trace.csv``, the true pose and the sensors' last readings (:mod:`simmer.record.trace`);
+  these two are read back only by :mod:`simmer.record.reader`;
 - ``report.json`` and ``report.md``, written when the run ends: its outcome (the Task 2 time,
   collisions, path length, commands, NaN replies, final pose) and its facts (seed, length, how
   it ended); ``report.md`` is in plain words for a lab report and shows ``path.png`` and
@@ -44,12 +45,8 @@ from simmer.devices.registry import BUILTIN_KINDS
 from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
-from simmer.record.eventlog import (
-    EventLog,
-    RecordingBudget,
-    read_events,
-    stop_reason,
-)
+from simmer.record.eventlog import EventLog, RecordingBudget, stop_reason
+from simmer.record.reader import EVENTS, TRACE, read_events
 from simmer.record.safefile import check_target, write_text
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
 from simmer.untrusted import parse_json, read_at_most
@@ -61,8 +58,6 @@ from simmer.world.simulation import Simulation
 FORMAT = 1
 """Version of the run folder's layout, in the manifest; a reader refuses a newer one."""
 MANIFEST = "manifest.json"
-EVENTS = "events.jsonl"
-TRACE = "trace.csv"
 REPORT_JSON = "report.json"
 REPORT_MD = "report.md"
 PLOTS = (
@@ -376,8 +371,10 @@ def load_run(
     """A recorded run's configuration (validated again from the manifest), seed and events.
 
     Plug-ins the run was recorded with are imported only with ``trust`` (or ``plugins`` in
-    their place: :func:`config_from_manifest`). ValueError naming the file if its events go
-    beyond ``max_seconds`` of simulated time (a replay would step that far)."""
+    their place: :func:`config_from_manifest`). ValueError naming the file if the manifest
+    is not a run's; :class:`~simmer.errors.RunFolderError` (a ValueError) if its events
+    cannot be read or go beyond ``max_seconds`` of simulated time (a replay would step that
+    far: :func:`simmer.record.reader.read_events`)."""
     data = read_manifest(folder)
     where = Path(folder) / MANIFEST
     try:

@@ -4,17 +4,13 @@ Rows are matched by the step they were written at (and how many resets came befo
 compared cell by cell as text: the same run writes the same digits, so any change of a pose or
 a reading shows (:mod:`simmer.record.trace` writes 10 significant digits). A recording cut
 short (``kill -9``) is compared as far as it goes; its last line, if it was cut in the middle,
-is left out.
+is left out. The files are read by :func:`simmer.record.reader.read_trace_rows`.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 
 STEP, TIME = "step", "time"
 NO_ROW = "no row"
@@ -64,43 +60,6 @@ class TraceRows:
         """The time of the last row, counted from the last reset before it (NaN: no rows, or
         not a number)."""
         return _time(self.rows[-1][1], self.header) if self.rows else math.nan
-
-
-def read_trace_rows(path: str | Path) -> TraceRows:
-    """The rows of a ``trace.csv`` (OSError if it cannot be read; ValueError if it has no
-    ``step`` column, or is larger than a recording holds). A last line without its newline,
-    or with too few cells, is left out."""
-    from simmer.record.eventlog import check_size
-
-    check_size(Path(path))
-    text = Path(path).read_text(encoding="utf-8")
-    if text and not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]
-    try:
-        return _rows(csv.reader(io.StringIO(text)), path)
-    except csv.Error as exc:
-        raise ValueError(f"{path}: {exc}") from None
-
-
-def _rows(reader: Iterator[list[str]], path: str | Path) -> TraceRows:
-    header = next(reader, [])
-    if STEP not in header:
-        raise ValueError(f"{path} has no {STEP} column")
-    step_at = header.index(STEP)
-    rows: list[tuple[RowKey, list[str]]] = []
-    part, previous = 0, -1
-    for row in reader:
-        if len(row) != len(header):
-            continue
-        try:
-            step = int(row[step_at])
-        except ValueError:
-            continue
-        if step < previous:  # a reset: the steps count from 0 again
-            part += 1
-        previous = step
-        rows.append(((part, step), row))
-    return TraceRows(header, rows)
 
 
 def _time(row: list[str], header: list[str]) -> float:

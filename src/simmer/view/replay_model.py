@@ -33,15 +33,14 @@ import numpy as np
 import simmer
 from simmer.colors import Color
 from simmer.devices.base import Circle, Segment, Shape
-from simmer.errors import ConfigError, ReplayError
+from simmer.errors import ConfigError, ReplayError, RunFolderError
 from simmer.geometry import FloatArray, Pose, Vec2
 from simmer.localize.belief import Belief
+from simmer.record.reader import EVENTS, TRACE, read_trace_rows
 from simmer.record.runfolder import (
-    EVENTS,
     MANIFEST,
     MAX_RUN_SECONDS,
     REPORT_JSON,
-    TRACE,
     library_versions,
     load_run,
     read_json,
@@ -49,13 +48,7 @@ from simmer.record.runfolder import (
     sensor_ids,
 )
 from simmer.record.trace import TraceWriter
-from simmer.record.tracecheck import (
-    TraceDifference,
-    TraceRows,
-    cut_short,
-    first_difference,
-    read_trace_rows,
-)
+from simmer.record.tracecheck import TraceDifference, TraceRows, cut_short, first_difference
 from simmer.view.frames import FPS, FrameClock
 from simmer.view.maker import LocalControls, SnapshotMaker
 from simmer.view.snapshot import RobotLayout, Snapshot, StaticScene
@@ -491,8 +484,8 @@ def _read_recorded_trace(folder: Path) -> TraceRows | None:
         return None
     try:
         return read_trace_rows(path)
-    except (OSError, UnicodeError, ValueError) as exc:
-        raise ReplayError(f"cannot read {path}: {exc}") from None
+    except RunFolderError as exc:  # "cannot read PATH: ..."
+        raise ReplayError(str(exc)) from None
 
 
 def _incomplete(folder: Path, events: list[Event], recorded: TraceRows | None) -> str | None:
