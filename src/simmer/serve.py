@@ -38,19 +38,6 @@ if TYPE_CHECKING:
 log = logging.getLogger("simmer.serve")
 
 
-def parse_speed(text: str) -> float | None:
-    """``"max"`` -> None (as fast as possible); otherwise a positive multiple of real time."""
-    if text.strip().lower() == "max":
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        raise ValueError(f"speed is a number (1 = real time) or 'max', not {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise ValueError(f"speed must be more than 0, not {text!r}")
-    return value
-
-
 STOP_SIGNALS = ("SIGTERM", "SIGHUP")
 """Signals that stop a run as Ctrl-C does (``kill``, closing the terminal), where they exist."""
 
