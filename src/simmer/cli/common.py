@@ -85,7 +85,3 @@ def simulation(config: Path | None) -> Simulation:
         report_config_error(exc)
         raise typer.Exit(1) from None
 
-
-def say(line: str) -> None:
-    """Print a line of data (a path, a message) as it is."""
-    out.print(line, markup=False)
