@@ -1,6 +1,6 @@
 """``simmer run``: serve every transport and run the loop, with the window or headless.
 
-Kept out of ``cli.py`` so the window, the headless run and the tests share one path.
+Kept out of :mod:`simmer.cli` so the window, the headless run and the tests share one path.
 """
 
 from __future__ import annotations

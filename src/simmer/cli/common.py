@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from simmer.cli.app import err, out
+from simmer.cli.app import err
 from simmer.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -84,4 +84,3 @@ def simulation(config: Path | None) -> Simulation:
     except ConfigError as exc:
         report_config_error(exc)
         raise typer.Exit(1) from None
-
