@@ -21,7 +21,8 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── SweepError + ValueError     a sweep file SimMeR cannot run
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
     ├── RunFolderError + ValueError a run folder's events or trace cannot be read
-    └── FolderExists + ValueError   ``simmer new`` would write over files
+    ├── FolderExists + ValueError   ``simmer new`` would write over files
+    └── FlagError + ValueError      a command-line flag ``simmer run`` refuses
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -159,6 +160,16 @@ class RunFolderError(SimmerError, ValueError):
 
 class FolderExists(SimmerError, ValueError):
     """The destination holds files already: nothing is written over them."""
+
+
+class FlagError(SimmerError, ValueError):
+    """A command-line flag's value refused, with the flag (``--speed``; None when the message
+    names the flags itself)."""
+
+    def __init__(self, message: str, flag: str | None = None) -> None:
+        super().__init__(f"{flag}: {message}" if flag else message)
+        self.flag = flag
+        self.message = message
 
 
 # ----------------------------------------------------------------------------- not errors

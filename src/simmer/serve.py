@@ -1,6 +1,6 @@
 """``simmer run``: serve every transport and run the loop, with the window or headless.
 
-Kept out of ``cli.py`` so the window, the headless run and the tests share one path.
+Kept out of :mod:`simmer.cli` so the window, the headless run and the tests share one path.
 """
 
 from __future__ import annotations
@@ -36,19 +36,6 @@ if TYPE_CHECKING:
     from simmer.ui.video import VideoRecorder
 
 log = logging.getLogger("simmer.serve")
-
-
-def parse_speed(text: str) -> float | None:
-    """``"max"`` -> None (as fast as possible); otherwise a positive multiple of real time."""
-    if text.strip().lower() == "max":
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        raise ValueError(f"speed is a number (1 = real time) or 'max', not {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise ValueError(f"speed must be more than 0, not {text!r}")
-    return value
 
 
 STOP_SIGNALS = ("SIGTERM", "SIGHUP")

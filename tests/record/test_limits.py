@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 
 from simmer import Simulation
-from simmer.cli import _recorded_run_limits
+from simmer.cli.run import _recorded_run_limits
 from simmer.record import RunRecorder, read_events
 from simmer.record.runfolder import MAX_RUN_SECONDS
 from simmer.view.replay_model import Recording

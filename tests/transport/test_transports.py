@@ -5,13 +5,18 @@ from __future__ import annotations
 
 import logging
 import math
+import socket
 import struct
 
 import pytest
 import serial
 
 from link_support import read_frame, serving, stream, two_port_send
+from simmer.options import RunOptions
+from simmer.ports import FREE, STREAM_PORT, Ports
 from simmer.protocol import MAX_COMMANDS
+from simmer.transport import Transports
+from simmer.transport.bus import CommandBus
 
 from helpers import default_data, make_sim
 
@@ -68,3 +73,21 @@ def test_a_reading_too_large_for_a_4_byte_reply_is_nan_with_its_reason_on_every_
         assert u1 == pytest.approx(3.5)  # the message is answered, the connection kept
         assert math.isnan(reading) if width == 4 else reading == 1e300
     assert caplog.text.count("beyond what a 4-byte reply holds") == (3 if width == 4 else 0)
+
+
+def test_options_naming_no_port_listen_on_the_configurations() -> None:
+    """Ports live in one place: a run's options say only where it departs from the
+    configuration (a free persistent port here), and the two-port pair is the file's."""
+    with socket.create_server(("127.0.0.1", 0)) as a, socket.create_server(("127.0.0.1", 0)) as b:
+        rx, tx = a.getsockname()[1], b.getsockname()[1]
+    data = default_data()
+    data.update(port_rx=rx, port_tx=tx, host="127.0.0.1")
+    sim = make_sim(data)
+    bus = CommandBus()
+    link = Transports(bus, sim.config, RunOptions(ports=Ports(stream=FREE)))
+    try:
+        assert (link.host, link.two_port.port_rx, link.two_port.port_tx) == ("127.0.0.1", rx, tx)
+        assert link.stream.port not in (0, STREAM_PORT)
+    finally:
+        link.close()
+        bus.close()

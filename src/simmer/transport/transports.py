@@ -26,9 +26,10 @@ def is_loopback(host: str) -> bool:
 
 class Transports:
     """The two-port server, the stream server and (optionally) the virtual serial port, on the
-    host and ports of ``options`` (default: the configuration's, :meth:`RunOptions.for_config`);
-    the bytes they read and set aside are counted by ``clock`` (the runner's, so that a clock
-    message's `` @N`` can wait for them; None: nowhere)."""
+    host and ports of ``options`` (the configuration's where they name none:
+    :meth:`Ports.resolve <simmer.ports.Ports.resolve>`); the bytes they read and set aside are
+    counted by ``clock`` (the runner's, so that a clock message's `` @N`` can wait for them;
+    None: nowhere)."""
 
     def __init__(
         self,
@@ -39,8 +40,9 @@ class Transports:
         clock: ByteCounter | None = None,
     ) -> None:
         settings = config.settings
-        options = options if options is not None else RunOptions.for_config(config)
-        self.host = options.host
+        options = options if options is not None else RunOptions()
+        self.host = options.host if options.host is not None else settings.host
+        port_rx, port_tx, stream_port = options.ports.resolve(settings.port_rx, settings.port_tx)
         if not is_loopback(self.host):
             log.warning(
                 "listening on %s: any machine that can reach it can drive the robot", self.host
@@ -50,8 +52,8 @@ class Transports:
         self.two_port = TwoPortServer(
             bus,
             self.host,
-            options.port_rx,
-            options.port_tx,
+            port_rx,
+            port_tx,
             codec=codec,
             timeout=settings.timeout,
         )
@@ -60,7 +62,7 @@ class Transports:
             self.stream = StreamServer(
                 bus,
                 self.host,
-                options.stream_port,
+                stream_port,
                 width=settings.reply_bytes,
                 encoding=settings.str_encoding,
                 timeout=settings.timeout,

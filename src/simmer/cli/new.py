@@ -1,0 +1,38 @@
+"""``simmer new``: a folder of one's own for Lab 1."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from simmer.cli.app import Command, app, err, example, out
+
+
+@app.command(
+    cls=Command,
+    short_help="Make a folder of your own for Lab 1 (rover, programs, sweeps).",
+    epilog=example("simmer new lab1", "cd lab1", "simmer check my_rover.toml"),
+)
+def new(
+    folder: Annotated[
+        Path, typer.Argument(help="The folder to make (new, or empty).", metavar="DIR")
+    ],
+) -> None:
+    """Make a folder of your own for Lab 1: the lab's rover (my_rover.toml), the example
+    programs, two sweep files and a README pointing at the lab page, whose every command runs
+    from this folder."""
+    from simmer.errors import FolderExists
+    from simmer.newfolder import lab_page, new_folder
+
+    try:
+        written = new_folder(folder)
+    except (FolderExists, OSError) as exc:
+        err.print(f"cannot make the folder: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"made {folder}: {', '.join(path.name for path in written)}", markup=False)
+    out.print(
+        f"next: cd {folder}, then simmer check my_rover.toml; the lab page: {lab_page()}",
+        markup=False,
+    )

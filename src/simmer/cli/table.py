@@ -1,0 +1,56 @@
+"""``simmer table``: a lookup table of noise-free readings at every pose."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from simmer.cli.app import Command, app, err, example, out
+from simmer.cli.common import ConfigArg, simulation
+
+
+@app.command(
+    cls=Command,
+    short_help="Write a lookup table of noise-free readings at every pose.",
+    epilog=example("simmer table my_rover.toml --step 1 --headings 0:360:1 -o table.npz"),
+)
+def table(
+    config: ConfigArg = None,
+    output: Annotated[
+        Path,
+        typer.Option("--output", "-o", help="Table to write: .npz or .csv.", metavar="FILE"),
+    ] = Path("table.npz"),
+    step: Annotated[
+        float, typer.Option(help="Inches between positions (x and y).", metavar="INCHES")
+    ] = 1.0,
+    headings: Annotated[
+        str, typer.Option(help="Headings START:STOP:STEP in degrees.", metavar="RANGE")
+    ] = "0:360:1",
+    sensor: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="A sensor to include (repeat it; default: every one it can).", metavar="ID"
+        ),
+    ] = None,
+) -> None:
+    """Write the readings each sensor gives with its noise off at every position (every STEP
+    inches, half a step from the walls' lines) and heading, from the walls alone (no block):
+    ultrasonic, infrared and compass sensors, with the simulator's own geometry."""
+    from rich.progress import Progress
+
+    from simmer.localize.files import write_table
+    from simmer.world.expected import parse_headings
+
+    sim = simulation(config)
+    try:
+        angles = parse_headings(headings)
+        with Progress(console=err, transient=True) as progress:
+            task = progress.add_task("casting rays", total=None)
+            done = lambda row, rows: progress.update(task, completed=row, total=rows)  # noqa: E731
+            count, ids = write_table(sim, output, step, angles, sensor, done)
+    except (ValueError, OSError) as exc:
+        err.print(f"cannot write the table: {exc}", style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    out.print(f"wrote {output}: {count:,} readings of {', '.join(ids)}", markup=False)
