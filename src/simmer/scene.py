@@ -83,10 +83,10 @@ class Grid:
 
 @dataclass(frozen=True)
 class Walls:
-    """Axis-aligned wall segments (N, 4: x1, y1, x2, y2), each a slab ``width`` thick whose
-    ends reach half its width past the segment's, so corners close."""
+    """The walls' centre lines (N, 4: x1, y1, x2, y2, axis-aligned), each a slab ``width``
+    thick whose ends reach half its width past the line's, so corners close."""
 
-    segments: FloatArray
+    lines: FloatArray
     color: Color
     width: float
     layer: float
@@ -154,7 +154,7 @@ Item = Grid | Walls | Cells | Lines | Label | Outline | Arrow
 class Palette:
     """The colours the window tints from the settings' own, for the scene and a video's palette."""
 
-    solid: Color
+    solid_cell: Color
     """A solid cell: the background darkened (a path plot shows it the same)."""
     robot_fill: Color
     """Inside the robot's outline: its colour, paled."""
@@ -165,7 +165,7 @@ class Palette:
     def of(cls, settings: Settings) -> Palette:
         """The palette of one configuration's settings."""
         return cls(
-            solid=tint(settings.background_color, 0.35, (0, 0, 0)),
+            solid_cell=tint(settings.background_color, 0.35, (0, 0, 0)),
             robot_fill=tint(settings.robot_color, 0.75),
             block_edge=tint(settings.block_color, 0.5, (0, 0, 0)),
         )
@@ -186,7 +186,7 @@ def maze_items(
         floor = np.where(maze.floor_white[..., None], (*WHITE_TILE, 255), (*BLACK_TILE, 255))
         items.append(Grid(maze.tile, maze.width, maze.height, floor.astype(np.uint8), FLOOR))
     solid = np.zeros((*maze.solid.shape, 4), dtype=np.uint8)
-    solid[maze.solid] = (*(MAP_SOLID if look is Look.MAP else Palette.of(settings).solid), 255)
+    solid[maze.solid] = (*(MAP_SOLID if look is Look.MAP else Palette.of(settings).solid_cell), 255)
     layer = MAP_CELLS if look is Look.MAP else SOLID
     items.append(Grid(maze.cell, maze.width, maze.height, solid, layer))
     if zones is not None:
@@ -201,7 +201,7 @@ def maze_items(
         items.append(Walls(maze.segments, settings.wall_color, 2.5, WALL))
     else:
         items.append(Walls(maze.segments, MAP_INK, 2.0, MAP_WALLS))
-    return items
+    return sorted(items, key=lambda item: item.layer)  # stable: a zone's name after its shape
 
 
 def zone_items(zone: Zone, color: Color, cell: float, look: Look) -> list[Item]:

@@ -37,7 +37,7 @@ def draw_items(ax: Axes, items: Iterable[Item]) -> None:
             clip = Rectangle((0, 0), item.width, item.height, transform=ax.transData)
             image.set_clip_path(clip)
         elif isinstance(item, Walls):
-            lines = list(item.segments.reshape(-1, 2, 2))
+            lines = list(item.lines.reshape(-1, 2, 2))
             colors = [rgb(item.color)]
             walls = LineCollection(lines, colors=colors, lw=item.width, zorder=item.layer)
             walls.set_capstyle("projecting")  # a slab: its ends reach past the segment's

@@ -112,7 +112,7 @@ def paint_items(r: Renderer, view: View, items: list[Item]) -> None:
             _paint_grid(r, view, item)
         elif isinstance(item, Walls):
             half = item.width / 2
-            for x1, y1, x2, y2 in item.segments.tolist():
+            for x1, y1, x2, y2 in item.lines.tolist():
                 a = view.point(min(x1, x2) - half, min(y1, y2) - half)
                 b = view.point(max(x1, x2) + half, max(y1, y2) + half)
                 r.draw_rect((a[0], a[1], b[0] - a[0], b[1] - a[1]), item.color)
@@ -171,7 +171,7 @@ class ScenePainter:
             self.panel_color,
             WHITE_TILE,
             BLACK_TILE,
-            self.palette.solid,
+            self.palette.solid_cell,
             settings.wall_color,
             RULER_COLOR,
             settings.block_color,
