@@ -1,6 +1,6 @@
 """Colours (RGB) and pixel types the window, videos and plots share: a leaf module with no
-pygame, so the run's plots (:mod:`simmer.record.plots`) colour the floor and zones as the
-window paints them without importing the window."""
+pygame, so the scene (:mod:`simmer.scene`) colours the floor and zones of every picture alike
+without importing the window."""
 
 from __future__ import annotations
 
@@ -20,3 +20,17 @@ DROPOFF_COLOR: Color = (20, 170, 60)
 """A drop-off zone's outline: green."""
 TARGET_COLOR: Color = (250, 200, 0)
 """The run's target zone: yellow, over its green outline."""
+START_COLOR: Color = (26, 152, 80)
+"""The robot at its start on a run's path plot: green."""
+MAP_SOLID: Color = (85, 85, 85)
+"""A solid cell on a sweep's map of the maze: grey."""
+MAP_ZONE: Color = (221, 230, 245)
+"""A zone's cells on a sweep's map: pale blue, under the picture's own colours."""
+MAP_INK: Color = (0, 0, 0)
+"""Walls and zone names on a sweep's map: black."""
+
+
+def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
+    """``color`` moved ``amount`` (0..1) of the way toward ``toward``."""
+    r, g, b = (round(c + (t - c) * amount) for c, t in zip(color, toward, strict=True))
+    return (r, g, b)

@@ -22,7 +22,7 @@ LAYERS = [
     {"devices", "console"},
     {"compat"},
     {"config"},
-    {"options", "world"},
+    {"options", "world", "scene"},
     {"localize", "transport"},
     {"clock"},
     {"runner", "record"},

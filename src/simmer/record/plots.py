@@ -40,13 +40,25 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import ValidationError
 
-from simmer.colors import BLACK_TILE, DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR, WHITE_TILE
-from simmer.config.maze import Block, Maze, robot_outline
+from simmer.colors import START_COLOR as START_RGB
+from simmer.colors import TRAIL_COLOR, Color
+from simmer.config.maze import Maze
 from simmer.config.models import Settings
+from simmer.config.zones import Zones
 from simmer.errors import PlotError, RunFolderError, UnsafeOutput
-from simmer.geometry import FloatArray, Pose, heading_vector, place_polygon
+from simmer.geometry import FloatArray, Pose
+from simmer.record.page import draw_items, rgb
 from simmer.record.reader import EVENTS, TRACE, event_objects, read_trace
 from simmer.record.safefile import check_target, replacing, write_text
+from simmer.scene import (
+    Look,
+    Walls,
+    block_items,
+    maze_items,
+    placed_block,
+    placed_robot,
+    robot_items,
+)
 from simmer.untrusted import drawable, read_at_most
 from simmer.world.localization import (
     HEADING_TOLERANCE,
@@ -89,11 +101,11 @@ LOCALIZATION_WORDS = (LOCALIZATION_IMAGE, "The program's estimate against the tr
 IMAGES = ((PATH_IMAGE, "The robot's true path"), (SENSORS_IMAGE, "Sensor readings against time"))
 """The images :func:`plot_run` draws, with the words report.md shows for each."""
 
-PATH_COLOR = "#ff8c00"
+PATH_COLOR = "#" + bytes(TRAIL_COLOR).hex()
 COMMAND_COLOR = "#1f3b73"
 NAN_COLOR = "#d7191c"
 COLLISION_COLOR = "#ff00c8"
-START_COLOR = "#1a9850"
+START_COLOR = "#" + bytes(START_RGB).hex()
 DPI = 110
 PAGE_INCHES = 12.0
 """Inches of the page the maze's longest side takes on path.png."""
@@ -644,12 +656,6 @@ def _has_glyph(char: str) -> bool:
     return ord(char) in _glyphs()
 
 
-def _rgb(color: Sequence[int]) -> tuple[float, float, float]:
-    """A 0-255 RGB colour as matplotlib's 0-1."""
-    r, g, b = color[:3]
-    return r / 255, g / 255, b / 255
-
-
 def _title(run: RecordedRun) -> str:
     """The second title line: time, distance, commands, collisions, block, resets, seed,
     configuration."""
@@ -690,16 +696,19 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     height = maze.height / scale + 2.2
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
-    ax.set_facecolor(_rgb(settings.background_color))
-    _draw_maze(ax, maze, settings)
-    if "gripper" in run.kinds.values():
-        _draw_zones(ax, settings, run.scenario.target if run.scenario else None)
-    start, block, wall = _draw_block_and_start(ax, settings, run.scenario)
+    ax.set_facecolor(rgb(settings.background_color))
+    zones = Zones.from_settings(settings) if "gripper" in run.kinds.values() else None
+    target = run.scenario.target if run.scenario else None
+    maze_scene = maze_items(maze, settings, Look.PAGE, zones, target)
+    draw_items(ax, maze_scene)
+    walls = next(item for item in maze_scene if isinstance(item, Walls))
+    wall = _line(rgb(walls.color), "-", "wall")
+    start, block = _draw_block_and_start(ax, settings, run.scenario)
     for p in range(trace.parts):
         rows = trace.part == p
         ax.plot(trace.x[rows], trace.y[rows], color=PATH_COLOR, lw=2.4, zorder=4)
     end = (float(trace.x[-1]), float(trace.y[-1]), float(trace.heading[-1]))
-    _draw_robot(ax, settings, end, PATH_COLOR, "--")
+    _draw_robot(ax, settings, end, TRAIL_COLOR, dashed=True)
     ax.plot(end[0], end[1], "s", ms=7, mfc=PATH_COLOR, mec="black", zorder=6)
     handles = [_line(PATH_COLOR, "-", "path driven"), start]
     handles.append(_line(PATH_COLOR, "s", "end (outline, heading)", mec="black"))
@@ -729,104 +738,33 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     return fig, ax
 
 
-def _draw_maze(ax: Axes, maze: Maze, settings: Settings) -> None:
-    """Floor tiles, solid cells and walls, as the simulator builds and draws them."""
-    from matplotlib.collections import LineCollection
-    from matplotlib.patches import Rectangle
-
-    rows, cols = maze.floor_white.shape
-    floor = np.where(maze.floor_white[..., None], WHITE_TILE, BLACK_TILE).astype(np.uint8)
-    image = ax.imshow(
-        floor,
-        extent=(0, cols * maze.tile, rows * maze.tile, 0),
-        interpolation="nearest",
-        zorder=1,
-    )
-    image.set_clip_path(Rectangle((0, 0), maze.width, maze.height, transform=ax.transData))
-    solid_rgb = tuple(round(c * 0.65) for c in settings.background_color)  # the window's tint
-    solid = np.zeros((maze.rows, maze.cols, 4), dtype=np.uint8)
-    solid[maze.solid] = (*solid_rgb, 255)
-    ax.imshow(solid, extent=(0, maze.width, maze.height, 0), interpolation="nearest", zorder=2)
-    walls = list(maze.segments.reshape(-1, 2, 2))
-    ax.add_collection(LineCollection(walls, colors=[_rgb(settings.wall_color)], lw=2.5, zorder=3))
-
-
-def _draw_zones(ax: Axes, settings: Settings, target: str | None) -> None:
-    """A project's zones as the window draws them: loading blue, drop-off green, the target
-    yellow, each named in its first cell."""
-    from matplotlib.patches import Rectangle
-
-    from simmer.config.zones import Zones
-
-    zones = Zones.from_settings(settings)
-    cell = settings.wall_segment_length
-    for zone in zones.all():
-        color = LOADING_COLOR if zone is zones.loading else DROPOFF_COLOR
-        color = TARGET_COLOR if zone.name == target else color
-        for row, col in zone.cells:
-            ax.add_patch(
-                Rectangle(
-                    (col * cell, row * cell), cell, cell, fc=(*_rgb(color), 0.28), ec="none",
-                    zorder=2.5,
-                )
-            )  # fmt: skip
-        row, col = min(zone.cells)
-        ax.annotate(
-            zone.name,
-            (col * cell + 0.6, row * cell + 0.6),
-            va="top",
-            fontsize=9,
-            color=_rgb(color),
-            fontweight="bold",
-            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8},
-            zorder=3.2,
-        )
-
-
 def _draw_block_and_start(
     ax: Axes, settings: Settings, scenario: RecordedScenario | None = None
-) -> tuple[Any, Any, Any]:
+) -> tuple[Any, Any]:
     """The block and the robot's outline and heading at the start (a project run's drawn
-    ones if known); legend entries for the start, the block and the walls."""
-    from matplotlib.patches import Polygon
-
-    block = Block.from_settings(settings)
-    start = (*settings.robot_start_position, settings.robot_start_rotation)
-    if scenario is not None:
-        block.place(*scenario.block, block.rotation)
-        start = scenario.start
-    color = _rgb(settings.block_color)
-    ax.add_patch(Polygon(block.polygon, closed=True, fc=color, ec="black", lw=1.0, zorder=5))
-    x, y, _ = start
-    _draw_robot(ax, settings, start, START_COLOR, "-")
-    ax.plot(x, y, "o", ms=8, mfc=START_COLOR, mec="white", zorder=6)
+    ones if known); legend entries for the start and the block."""
+    polygon = placed_block(settings, scenario.block if scenario is not None else None)
+    start = scenario.start if scenario is not None else (
+        *settings.robot_start_position, settings.robot_start_rotation
+    )  # fmt: skip
+    draw_items(ax, block_items(polygon, settings, Look.PAGE))
+    _draw_robot(ax, settings, start, START_RGB)
+    ax.plot(start[0], start[1], "o", ms=8, mfc=START_COLOR, mec="white", zorder=6)
     return (
         _line(START_COLOR, "o", "start (outline, heading)", mec="white"),
-        _line(color, "s", "block", mec="black"),
-        _line(_rgb(settings.wall_color), "-", "wall"),
+        _line(rgb(settings.block_color), "s", "block", mec="black"),
     )
 
 
 def _draw_robot(
-    ax: Axes, settings: Settings, pose: tuple[float, float, float], color: str, style: str
+    ax: Axes,
+    settings: Settings,
+    pose: tuple[float, float, float],
+    color: Color,
+    dashed: bool = False,
 ) -> None:
     """The robot's outline at ``pose`` and an arrow along its heading, under the path."""
-    from matplotlib.patches import Polygon
-
-    x, y, heading = pose
-    outline = robot_outline(settings)
-    placed = np.empty_like(outline)
-    place_polygon(outline, x, y, heading, placed)
-    ax.add_patch(Polygon(placed, closed=True, fill=False, ec=color, lw=2.0, ls=style, zorder=3.5))
-    reach = 1.4 * float(np.abs(outline).max())
-    dx, dy = heading_vector(heading)
-    ax.annotate(
-        "",
-        xy=(x + dx * reach, y + dy * reach),
-        xytext=(x, y),
-        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 2.0},
-        zorder=3.5,
-    )
+    draw_items(ax, robot_items(placed_robot(settings, pose), settings, Look.PAGE, color, dashed))
 
 
 def _draw_commands(ax: Axes, run: RecordedRun, scale: float) -> list[Any]:

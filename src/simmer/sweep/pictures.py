@@ -12,8 +12,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from simmer.record.page import draw_items
 from simmer.record.plots import drawable_texts
 from simmer.record.safefile import replacing
+from simmer.scene import Look, Walls, maze_items
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
 
@@ -122,7 +124,6 @@ def _start_cells_figure(
 
     settings = build_config(str(spec.configs[0]), ()).settings
     maze = Maze.from_settings(settings)
-    zones = Zones.from_settings(settings)
     cell = maze.cell
     by_cell: dict[tuple[int, int], list[Mapping[str, str]]] = {}
     for r in rows:
@@ -131,17 +132,10 @@ def _start_cells_figure(
     cmap = colormaps["RdYlGn"]
     panel_height = 4.2 * maze.height / maze.width + 0.5
     fig = Figure(figsize=(8.0, panel_height * len(panels)), layout="constrained")
+    scene = maze_items(maze, settings, Look.MAP, Zones.from_settings(settings))
     for i, (column, title) in enumerate(panels):
         ax = fig.add_subplot(len(panels), 1, i + 1)
-        for row, col in zip(*np.nonzero(maze.solid), strict=True):
-            ax.add_patch(Rectangle((col * cell, row * cell), cell, cell, fc="#555555"))
-        for zone in zones.all():
-            for row, col in zone.cells:
-                ax.add_patch(
-                    Rectangle((col * cell, row * cell), cell, cell, fc="#dde6f5", ec="none")
-                )
-            row, col = min(zone.cells)
-            ax.text(col * cell + 0.8, row * cell + 0.8, zone.name, va="top", fontsize=7)
+        draw_items(ax, scene)
         met_total = 0
         for (row, col), runs in by_cell.items():
             met = sum(_met(r, column) for r in runs)
@@ -156,8 +150,6 @@ def _start_cells_figure(
                 va="center",
                 fontsize=8,
             )
-        for x1, y1, x2, y2 in maze.segments:
-            ax.plot([x1, x2], [y1, y2], color="black", lw=2)
         ax.set_xlim(-1, maze.width + 1)
         ax.set_ylim(maze.height + 1, -1)  # +y down the page, as in the window
         ax.set_aspect("equal")
@@ -232,8 +224,9 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     maze = Maze.from_settings(settings)
     fig = Figure(figsize=(8.0, 7.0 * maze.height / maze.width + 0.6), layout="constrained")
     ax = fig.add_subplot()
-    for x1, y1, x2, y2 in maze.segments:
-        ax.plot([x1, x2], [y1, y2], color="black", lw=2)
+    draw_items(
+        ax, [item for item in maze_items(maze, settings, Look.MAP) if isinstance(item, Walls)]
+    )
     if not spec.project:  # a project run's block and start may be drawn: each its own
         bx, by = settings.block_position
         ax.plot(bx, by, "s", ms=10, mfc="none", mec="#555555", label="block")

@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 
-from simmer.colors import Color
+from simmer.colors import Color, tint
 from simmer.localize.belief import Belief
 from simmer.ui.render import Renderer
-from simmer.ui.scene import View, tint
+from simmer.ui.scene import View
 
 BELIEF_COLOR: Color = (140, 40, 200)
 """The belief's colour: purple, unlike anything the simulator draws of the truth."""

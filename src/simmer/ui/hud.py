@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from simmer.colors import TRAIL_COLOR, Color
+from simmer.colors import TRAIL_COLOR, Color, tint
 from simmer.ui.render import Renderer
-from simmer.ui.scene import PANEL_HEIGHT, tint
+from simmer.ui.scene import PANEL_HEIGHT
 from simmer.view.commands import RepeatedCommand
 from simmer.view.snapshot import HasScene, Snapshot
 from simmer.world.outcome import OutcomeReport

@@ -18,12 +18,12 @@ from pathlib import Path
 
 import pygame
 
-from simmer.colors import Color
+from simmer.colors import Color, tint
 from simmer.errors import SimmerError
 from simmer.ui.hud import ALARM, BOX, DIM, LIT, TEXT, UNLIT, reply_text
 from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.render import PygameRenderer, Renderer, TextCache
-from simmer.ui.scene import PANEL_HEIGHT, base_scene_size, default_window_size, tint
+from simmer.ui.scene import PANEL_HEIGHT, base_scene_size, default_window_size
 from simmer.ui.window import HIDDEN_DRIVERS, new_file, save_screenshot
 from simmer.untrusted import drawable
 from simmer.view.replay_model import Playhead, Recording, ReplayCommand

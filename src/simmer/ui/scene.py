@@ -1,9 +1,12 @@
 """Painting the world: inches become pixels here, never in the model (DESIGN §1).
 
-The static layer (background, floor tiles, walls, inch rulers) is painted once per window size
-from the configuration and maze; the dynamic layer (block, robot, device outlines, sensor
-measurements) every frame from a :class:`~simmer.view.snapshot.Snapshot`, never from the live
-simulation, so painting can run in another thread than the one stepping it.
+What the maze, zones, block and robot are drawn as is :mod:`simmer.scene`'s (the window's
+look); :func:`paint_items` is its pygame adapter, drawing through a :class:`Renderer`.
+The static layer (background, floor tiles, zones, walls, inch rulers) is painted once per
+window size from the configuration and maze; the dynamic layer (block, robot, device
+outlines, sensor measurements) every frame from a :class:`~simmer.view.snapshot.Snapshot`,
+never from the live simulation, so painting can run in another thread than the one stepping
+it.
 """
 
 from __future__ import annotations
@@ -24,19 +27,30 @@ from simmer.colors import (
     WHITE_TILE,
     Color,
     Point,
+    tint,
 )
-from simmer.config.zones import Zone, Zones, zones_shown
+from simmer.config.zones import Zones, zones_shown
 from simmer.devices.base import Circle, Segment
 from simmer.geometry import FloatArray
+from simmer.scene import (
+    Grid,
+    Item,
+    Label,
+    Lines,
+    Look,
+    Outline,
+    Palette,
+    Walls,
+    block_items,
+    maze_items,
+    robot_items,
+    target_items,
+)
 from simmer.ui.render import Renderer
 from simmer.view.snapshot import HasScene, Snapshot
 
 PANEL_HEIGHT = 112
 """Pixels above the maze reserved for the heads-up display."""
-ZONE_INSET = 0.7
-"""Inches between a zone's outline and the walls, so both show."""
-ZONE_LINE = 0.45
-"""Inches: the width of a zone's outline."""
 
 
 @dataclass(frozen=True)
@@ -90,10 +104,46 @@ def default_window_size(scene: HasScene) -> tuple[int, int]:
     return (math.ceil(width), math.ceil(height) + PANEL_HEIGHT)
 
 
-def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:
-    """``color`` moved ``amount`` (0..1) of the way toward ``toward``."""
-    r, g, b = (round(c + (t - c) * amount) for c, t in zip(color, toward, strict=True))
-    return (r, g, b)
+def paint_items(r: Renderer, view: View, items: list[Item]) -> None:
+    """Draw a window scene's items (:mod:`simmer.scene`, :attr:`~simmer.scene.Look.WINDOW`)
+    in order, inches made pixels: grid cells' edges on whole pixels so neighbours meet."""
+    for item in items:
+        if isinstance(item, Grid):
+            _paint_grid(r, view, item)
+        elif isinstance(item, Walls):
+            half = item.width / 2
+            for x1, y1, x2, y2 in item.lines.tolist():
+                a = view.point(min(x1, x2) - half, min(y1, y2) - half)
+                b = view.point(max(x1, x2) + half, max(y1, y2) + half)
+                r.draw_rect((a[0], a[1], b[0] - a[0], b[1] - a[1]), item.color)
+        elif isinstance(item, Lines):
+            width = view.width(item.width)
+            for start, end in item.lines:
+                r.draw_segment(view.point(*start), view.point(*end), item.color, width)
+        elif isinstance(item, Label):
+            size = max(10, round(view.ppi * item.size))
+            r.draw_text(item.text, view.point(*item.at), item.color, size)
+        elif isinstance(item, Outline):
+            points = view.points(item.points)
+            if item.fill is not None:
+                r.draw_polygon(points, item.fill)
+            if item.edge is not None:
+                r.draw_polygon(points, item.edge, view.width(item.width))
+        else:
+            raise ValueError(f"the window does not draw {type(item).__name__}")
+
+
+def _paint_grid(r: Renderer, view: View, grid: Grid) -> None:
+    """A grid's drawn cells, each a rectangle between whole-pixel edges."""
+    rows, cols = grid.rgba.shape[:2]
+    xs = [round(view.ox + min(c * grid.cell, grid.width) * view.ppi) for c in range(cols + 1)]
+    ys = [round(view.oy + min(i * grid.cell, grid.height) * view.ppi) for i in range(rows + 1)]
+    shown = grid.rgba[..., 3] > 0
+    colors = grid.rgba[..., :3].tolist()
+    for row, col in zip(*np.nonzero(shown), strict=True):
+        red, green, blue = colors[row][col]
+        rect = (xs[col], ys[row], xs[col + 1] - xs[col], ys[row + 1] - ys[row])
+        r.draw_rect(rect, (red, green, blue))
 
 
 class ScenePainter:
@@ -107,11 +157,11 @@ class ScenePainter:
         settings = scene.config.settings
         self.settings = settings
         self.maze = scene.maze
-        self.robot_fill = tint(settings.robot_color, 0.75)
-        self.solid_color = tint(settings.background_color, 0.35, (0, 0, 0))
+        self.palette = Palette.of(settings)
+        self.robot_fill = self.palette.robot_fill
         self.panel_color = tint(settings.background_color, 0.6, (0, 0, 0))
-        self.block_edge = tint(settings.block_color, 0.5, (0, 0, 0))
         self.zones = Zones.from_settings(settings) if zones_shown(scene.config) else None
+        self.static_items = maze_items(self.maze, settings, Look.WINDOW, self.zones)
 
     def colors(self) -> list[Color]:
         """The flat colours this painter paints with (a GIF's palette keeps them exact)."""
@@ -121,11 +171,11 @@ class ScenePainter:
             self.panel_color,
             WHITE_TILE,
             BLACK_TILE,
-            self.solid_color,
+            self.palette.solid_cell,
             settings.wall_color,
             RULER_COLOR,
             settings.block_color,
-            self.block_edge,
+            self.palette.block_edge,
             settings.robot_color,
             self.robot_fill,
             GHOST_COLOR,
@@ -138,66 +188,13 @@ class ScenePainter:
     # ----------------------------------------------------------------- static layer
 
     def paint_static(self, r: Renderer, view: View, size: tuple[int, int]) -> None:
-        """Background, HUD panel, floor tiles, solid cells, walls and inch rulers."""
+        """Background, HUD panel, the maze (floor tiles, solid cells, zones, walls) and inch
+        rulers."""
         settings = self.settings
-        maze = self.maze
         r.fill(settings.background_color)
         r.draw_rect((0, 0, size[0], PANEL_HEIGHT), self.panel_color)
-        tile = maze.tile
-        rows, cols = maze.floor_white.shape
-        xs = [round(view.ox + min(c * tile, maze.width) * view.ppi) for c in range(cols + 1)]
-        ys = [round(view.oy + min(r_ * tile, maze.height) * view.ppi) for r_ in range(rows + 1)]
-        for row in range(rows):
-            for col in range(cols):
-                color = WHITE_TILE if maze.floor_white[row, col] else BLACK_TILE
-                r.draw_rect((xs[col], ys[row], xs[col + 1] - xs[col], ys[row + 1] - ys[row]), color)
-        cell = maze.cell
-        for row, col in zip(*np.nonzero(maze.solid), strict=True):
-            x0, y0 = view.point(col * cell, row * cell)
-            x1, y1 = view.point((col + 1) * cell, (row + 1) * cell)
-            r.draw_rect(
-                (round(x0), round(y0), round(x1) - round(x0), round(y1) - round(y0)),
-                self.solid_color,
-            )
-        if self.zones is not None:
-            for zone in self.zones.all():
-                color = LOADING_COLOR if zone is self.zones.loading else DROPOFF_COLOR
-                self.paint_zone(r, view, zone, color)
-        half = settings.wall_thickness / 2
-        for x1, y1, x2, y2 in maze.segments.tolist():
-            a = view.point(min(x1, x2) - half, min(y1, y2) - half)
-            b = view.point(max(x1, x2) + half, max(y1, y2) + half)
-            r.draw_rect((a[0], a[1], b[0] - a[0], b[1] - a[1]), settings.wall_color)
+        paint_items(r, view, self.static_items)
         self._paint_rulers(r, view)
-
-    def paint_zone(self, r: Renderer, view: View, zone: Zone, color: Color) -> None:
-        """A zone's outline just inside its cells (no line between two of its cells), and its
-        name in its first cell's corner."""
-        cell = self.maze.cell
-        cells = set(zone.cells)
-        width = view.width(ZONE_LINE)
-        inset = ZONE_INSET
-        for row, col in zone.cells:
-            x0, y0 = col * cell + inset, row * cell + inset
-            x1, y1 = (col + 1) * cell - inset, (row + 1) * cell - inset
-            # extend along a side shared with the zone's next cell, so the outline is unbroken
-            left = x0 - 2 * inset if (row, col - 1) in cells else x0
-            right = x1 + 2 * inset if (row, col + 1) in cells else x1
-            top = y0 - 2 * inset if (row - 1, col) in cells else y0
-            bottom = y1 + 2 * inset if (row + 1, col) in cells else y1
-            sides = [
-                ((row - 1, col), (left, y0), (right, y0)),
-                ((row + 1, col), (left, y1), (right, y1)),
-                ((row, col - 1), (x0, top), (x0, bottom)),
-                ((row, col + 1), (x1, top), (x1, bottom)),
-            ]
-            for near, a, b in sides:
-                if near not in cells:
-                    r.draw_segment(view.point(*a), view.point(*b), color, width)
-        row, col = min(zone.cells)
-        size = max(10, round(view.ppi * 1.1))
-        corner = view.point(col * cell + 2 * inset, row * cell + 2 * inset)
-        r.draw_text(zone.name, corner, color, size)
 
     def _paint_rulers(self, r: Renderer, view: View) -> None:
         """Inch marks every cell along the top and left borders, if there is room."""
@@ -229,19 +226,12 @@ class ScenePainter:
     def paint_dynamic(self, r: Renderer, view: View, snap: Snapshot) -> None:
         """Block, robot (with a heading mark), visible devices, measurements, drag ghost."""
         settings = self.settings
-        if self.zones is not None and snap.target in self.zones.dropoff:
-            self.paint_zone(r, view, self.zones.dropoff[snap.target], TARGET_COLOR)
-        block_px = view.points(snap.block)
-        r.draw_polygon(block_px, settings.block_color)
-        r.draw_polygon(block_px, self.block_edge, view.width(settings.block_thickness))
+        if self.zones is not None:
+            paint_items(r, view, target_items(self.zones, snap.target, self.maze.cell))
+        paint_items(r, view, block_items(snap.block, settings, Look.WINDOW))
         layout = snap.layout
+        paint_items(r, view, robot_items(snap.robot[: layout.body + 2], settings, Look.WINDOW))
         points = view.points(snap.robot)
-        body = points[: layout.body]
-        thickness = view.width(settings.robot_thickness)
-        r.draw_polygon(body, self.robot_fill)
-        r.draw_polygon(body, settings.robot_color, thickness)
-        mark = layout.body
-        r.draw_segment(points[mark], points[mark + 1], settings.robot_color, thickness)
         for start, stop, color in layout.devices:
             r.draw_polygon(points[start:stop], color, 2)
         label_size = max(10, round(view.ppi * 0.9))

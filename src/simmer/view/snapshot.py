@@ -23,6 +23,7 @@ from simmer.config.models import SimConfig
 from simmer.devices.base import Shape
 from simmer.geometry import FloatArray, Pose, place_polygon
 from simmer.localize.belief import Belief
+from simmer.scene import Look, heading_mark
 from simmer.view.trail import TrailView
 from simmer.world import Simulation
 from simmer.world.events import CommandEvent
@@ -79,8 +80,7 @@ class RobotLayout:
     @classmethod
     def of(cls, robot: Robot) -> RobotLayout:
         """Stack a robot's shapes."""
-        reach = 0.3 * float(np.min(np.abs(robot.outline).max(axis=0)))
-        pieces = [robot.outline, np.array([[0.0, 0.0], [0.0, reach]])]
+        pieces = [robot.outline, heading_mark(robot.outline, Look.WINDOW)]
         devices = []
         start = len(robot.outline) + 2
         for device in robot.devices.values():
