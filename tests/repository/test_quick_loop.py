@@ -1,5 +1,6 @@
 """The quick test loop (issue 29, item 8): plain ``pytest`` leaves out what is marked slow, and
-a test not marked slow that uses more than two CPU seconds fails, saying to mark it."""
+a test not marked slow that uses more than two CPU seconds there (four when every test runs)
+fails, saying to mark it."""
 
 from __future__ import annotations
 
@@ -15,11 +16,17 @@ from helpers import REPO
 
 BURN = """\
 import pytest
-from conftest import QUICK_TEST_CPU_SECONDS, cpu_seconds
+from conftest import QUICK_TEST_CPU_SECONDS, WHOLE_SUITE_CPU_SECONDS, cpu_seconds
 
 
 def burn() -> None:
     end = cpu_seconds() + QUICK_TEST_CPU_SECONDS + 0.2
+    while cpu_seconds() < end:
+        pass
+
+
+def burn_more() -> None:
+    end = cpu_seconds() + WHOLE_SUITE_CPU_SECONDS + 0.2
     while cpu_seconds() < end:
         pass
 
@@ -32,27 +39,47 @@ def test_burns_unmarked() -> None:
     burn()
 
 
+def test_burns_more_unmarked() -> None:
+    burn_more()
+
+
 @pytest.mark.slow
 def test_burns_marked_slow() -> None:
     burn()
 """
 
 
+def _run_burn(folder: Path, *options: str) -> str:
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist"]
+    result = subprocess.run(
+        [*command, "-rA", *options, str(folder)],
+        capture_output=True,
+        text=True,
+        cwd=folder,
+        check=False,
+    )
+    return result.stdout
+
+
 @pytest.mark.slow
-def test_an_unmarked_test_over_two_cpu_seconds_fails(tmp_path: Path) -> None:
+def test_an_unmarked_test_over_its_cpu_bound_fails(tmp_path: Path) -> None:
     shutil.copy(REPO / "tests" / "conftest.py", tmp_path)
     (tmp_path / "pytest.ini").write_text("[pytest]\nmarkers =\n    slow\n    fresh\n")
     (tmp_path / "test_burn.py").write_text(BURN)
-    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist"]
-    result = subprocess.run(
-        [*command, "-rA", str(tmp_path)], capture_output=True, text=True, cwd=tmp_path, check=False
-    )
-    output = result.stdout
-    assert "PASSED test_burn.py::test_quick" in output, output
-    assert "PASSED test_burn.py::test_burns_marked_slow" in output, output
-    assert "FAILED test_burn.py::test_burns_unmarked" in output, output
-    assert "mark it @pytest.mark.slow" in output, output
-    assert "1 failed, 2 passed" in output, output
+
+    quick = _run_burn(tmp_path, "-m", "not slow and not fresh", "-k", "not more")
+    assert "PASSED test_burn.py::test_quick" in quick, quick
+    assert "FAILED test_burn.py::test_burns_unmarked" in quick, quick
+    assert "more than QUICK_TEST_CPU_SECONDS (2)" in quick, quick
+    assert "mark it @pytest.mark.slow" in quick, quick
+    assert "1 failed, 1 passed, 2 deselected" in quick, quick
+
+    whole = _run_burn(tmp_path)
+    assert "PASSED test_burn.py::test_burns_unmarked" in whole, whole
+    assert "PASSED test_burn.py::test_burns_marked_slow" in whole, whole
+    assert "FAILED test_burn.py::test_burns_more_unmarked" in whole, whole
+    assert "more than WHOLE_SUITE_CPU_SECONDS (4)" in whole, whole
+    assert "1 failed, 3 passed" in whole, whole
 
 
 def test_plain_pytest_leaves_out_slow_and_fresh_tests_and_test_sh_runs_all() -> None:

@@ -111,7 +111,7 @@ def test_a_grids_numbers_are_checked_as_settings(folder: Path, value: float) -> 
 
 
 @settings(
-    max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(values=st.lists(NUMBERS, min_size=1, max_size=3))
 def test_counts_and_seeds_are_checked(folder: Path, values: list[float]) -> None:
