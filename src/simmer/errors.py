@@ -156,7 +156,8 @@ class FolderExists(SimmerError, ValueError):
 
 
 class LimitReached(Exception):
-    """A policy ran into one of the run's limits (``seconds`` or ``timeout``)."""
+    """A policy ran into one of the run's limits: ``status`` is how the run ended (``seconds``
+    or ``timeout``, a :class:`~simmer.ending.RunEnd`'s value)."""
 
     def __init__(self, status: str) -> None:
         super().__init__(status)

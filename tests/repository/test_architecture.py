@@ -17,7 +17,7 @@ from helpers import REPO
 SRC = REPO / "src" / "simmer"
 
 LAYERS = [
-    {"pose", "ports", "errors", "protocol", "proctree", "colors", "lazy", "untrusted"},
+    {"pose", "ports", "errors", "ending", "protocol", "proctree", "colors", "lazy", "untrusted"},
     {"geometry", "lockstep", "client"},
     {"devices", "console"},
     {"compat"},
