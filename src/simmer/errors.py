@@ -41,6 +41,30 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
+__all__ = [
+    "BusClosed",
+    "ClientError",
+    "CommandError",
+    "ConfigError",
+    "ConfigIssue",
+    "ConnectionFailed",
+    "DeviceKindError",
+    "ExitCalled",
+    "FolderExists",
+    "LimitReached",
+    "PlotError",
+    "ReplayError",
+    "ReplyTimeout",
+    "ScenarioError",
+    "SimmerError",
+    "SweepError",
+    "SweepStopped",
+    "UnsafeOutput",
+    "UntrustedRun",
+    "WallLimitReached",
+    "WrongThread",
+]
+
 
 class SimmerError(Exception):
     """Base class of every error SimMeR raises deliberately."""
