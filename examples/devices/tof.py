@@ -18,8 +18,16 @@ import math
 
 from pydantic import Field
 
-from simmer.devices import Device, DeviceParams, Segment, Shape, World, register_device_kind
-from simmer.geometry import Vec2, heading_vector
+from simmer.devices import (
+    Device,
+    DeviceParams,
+    Segment,
+    Shape,
+    Vec2,
+    World,
+    heading_vector,
+    register_device_kind,
+)
 
 
 class TimeOfFlightParams(DeviceParams):

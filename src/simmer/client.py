@@ -45,7 +45,21 @@ from simmer.protocol import (
 )
 from simmer.untrusted import parse_json
 
+__all__ = [
+    "AskLink",
+    "Client",
+    "ClockLink",
+    "Link",
+    "Scheme",
+    "SerialLink",
+    "StreamLink",
+    "TwoPortLink",
+    "connect",
+]
+
 Scheme = Literal["stream", "two-port", "serial"]
+"""How :func:`connect` speaks: the persistent protocol, SimMeR's two-port scheme or a serial
+port."""
 log = logging.getLogger("simmer.client")
 
 

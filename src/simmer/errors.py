@@ -44,6 +44,30 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
+__all__ = [
+    "BusClosed",
+    "ClientError",
+    "CommandError",
+    "ConfigError",
+    "ConfigIssue",
+    "ConnectionFailed",
+    "DeviceKindError",
+    "ExitCalled",
+    "FolderExists",
+    "LimitReached",
+    "PlotError",
+    "ReplayError",
+    "ReplyTimeout",
+    "ScenarioError",
+    "SimmerError",
+    "SweepError",
+    "SweepStopped",
+    "UnsafeOutput",
+    "UntrustedRun",
+    "WallLimitReached",
+    "WrongThread",
+]
+
 
 class SimmerError(Exception):
     """Base class of every error SimMeR raises deliberately."""
@@ -176,7 +200,8 @@ class FlagError(SimmerError, ValueError):
 
 
 class LimitReached(Exception):
-    """A policy ran into one of the run's limits (``seconds`` or ``timeout``)."""
+    """A policy ran into one of the run's limits: ``status`` is how the run ended (``seconds``
+    or ``timeout``, a :class:`~simmer.ending.RunEnd`'s value)."""
 
     def __init__(self, status: str) -> None:
         super().__init__(status)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+__all__ = ["Pose", "Vec2"]
+
 
 class Vec2(NamedTuple):
     """An immutable 2-D point or vector in inches."""

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import TYPE_CHECKING
 
+from simmer.ending import RunEnd
 from simmer.lockstep import (
     EXIT_SECONDS,
     EXIT_TIMEOUT,
@@ -106,7 +107,7 @@ class Served:
 
     runner: Runner
     outcome: Outcome
-    ended_by: str
+    ended_by: RunEnd
     """``quit`` (Esc, closing the window, Ctrl-C, a signal), ``seconds`` (the simulated-time
     limit), ``program`` (the control program exited) or ``timeout`` (the wall-clock limit)."""
     program_status: int | None = None
@@ -120,11 +121,11 @@ class Served:
         """What ``simmer run`` exits with: the program's own status when it ended the run,
         :data:`~simmer.lockstep.EXIT_TIMEOUT` or (with a program) :data:`~simmer.lockstep.
         EXIT_SECONDS` when a limit did, 0 otherwise."""
-        if self.ended_by == "program":
+        if self.ended_by is RunEnd.PROGRAM:
             return self.program_status or 0
-        if self.ended_by == "timeout":
+        if self.ended_by is RunEnd.TIMEOUT:
             return EXIT_TIMEOUT
-        if self.ended_by == "seconds" and self.program_started:
+        if self.ended_by is RunEnd.SECONDS and self.program_started:
             return EXIT_SECONDS
         return 0
 
@@ -155,7 +156,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     )
     outcome = Outcome.attach(sim)
     stop = RunStop()
-    ended: list[str] = []  # who stopped the run first
+    ended: list[RunEnd] = []  # who stopped the run first
     started: Program | None = None
     # This process's descendants before the program started: what is not among them at
     # the end is the program's, even if Ctrl-C landed before ``started`` held it.
@@ -208,17 +209,17 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                     runner.run(stop_event=stop, until=options.seconds)
                 if signalled:
                     echo(f"stopped ({signalled[0]})")
-                    ended.insert(0, "quit")
+                    ended.insert(0, RunEnd.QUIT)
                 elif not ended:
                     limit = options.seconds is not None and sim.time >= options.seconds - 1e-9
-                    ended.append("seconds" if limit else "quit")
+                    ended.append(RunEnd.SECONDS if limit else RunEnd.QUIT)
         except KeyboardInterrupt:
             echo("stopped")
-            ended.append("quit")
+            ended.append(RunEnd.QUIT)
         except BaseException:
-            ended.append("error")
+            ended.append(RunEnd.ERROR)
             if recorder is not None:  # keep what was recorded, with a report
-                recorder.close("error")
+                recorder.close(RunEnd.ERROR)
             raise
         finally:
             runner.bus.close()
@@ -229,7 +230,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
             if filming is not None:
                 _finish_video(filming, echo)
         status = (
-            started.process.returncode if started is not None and ended[0] == "program" else None
+            started.process.returncode
+            if started is not None and ended[0] is RunEnd.PROGRAM
+            else None
         )
         if status is not None:  # here, in the thread that owns the simulation
             sim.emit(RunEvent(sim.time, "program-exit", float(status), sim.steps))
@@ -269,7 +272,7 @@ def _start_program(
     config: SimConfig,
     bus: CommandBus,
     stop: threading.Event,
-    ended: list[str],
+    ended: list[RunEnd],
     echo: Callable[[str], None],
 ) -> Program:
     """Start the control program of ``options`` on this run's ports; a thread ends the run
@@ -294,10 +297,10 @@ def _start_program(
     def watch() -> None:
         status = program.wait(timeout)
         if status is None:
-            ended.append("timeout")
+            ended.append(RunEnd.TIMEOUT)
             program.stop()
         else:
-            ended.append("program")
+            ended.append(RunEnd.PROGRAM)
         stop.set()
         bus.interrupt()  # the loop may be waiting for a message that will not come
 

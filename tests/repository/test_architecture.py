@@ -17,7 +17,18 @@ from helpers import REPO
 SRC = REPO / "src" / "simmer"
 
 LAYERS = [
-    {"pose", "ports", "errors", "protocol", "proctree", "colors", "lazy", "untrusted"},
+    {
+        "pose",
+        "ports",
+        "errors",
+        "ending",
+        "protocol",
+        "proctree",
+        "colors",
+        "lazy",
+        "untrusted",
+        "_api",
+    },
     {"geometry", "lockstep", "client"},
     {"devices", "console"},
     {"compat"},

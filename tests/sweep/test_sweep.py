@@ -25,7 +25,6 @@ from simmer.sweep import (
     SweepSpec,
     apply_overrides,
     build_config,
-    execute,
     failure_kind,
     load_sweep,
     run_sweep,
@@ -33,6 +32,7 @@ from simmer.sweep import (
     sweep_from_dict,
     wilson_interval,
 )
+from simmer.sweep.runs import execute
 from simmer.sweep.spec import OUTCOME_FIELDS
 from simmer.world.replay import replay
 

@@ -11,8 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from simmer.sweep import WARM, RunResult, RunSpec, build_config, execute
+from simmer.sweep import RunResult, RunSpec, build_config
 from simmer.sweep.results import row
+from simmer.sweep.runs import WARM, execute
 from simmer.world import Simulation
 
 from helpers import (

@@ -14,16 +14,9 @@ from pathlib import Path
 import pytest
 
 from simmer.errors import SweepError
-from simmer.sweep import (
-    WARM,
-    RunSpec,
-    build_config,
-    execute,
-    local_pool,
-    run_sweep,
-    sweep_from_dict,
-)
+from simmer.sweep import RunSpec, build_config, local_pool, run_sweep, sweep_from_dict
 from simmer.sweep.engine import DaskExecutor, _LocalPool
+from simmer.sweep.runs import WARM, execute
 
 from helpers import EXAMPLES
 

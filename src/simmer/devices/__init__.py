@@ -1,4 +1,9 @@
-"""Device kinds and their registry (built-in kinds are imported on first use, by name)."""
+"""Device kinds and their registry (built-in kinds are imported on first use, by name).
+
+What a device kind of one's own subclasses (:class:`Device`, :class:`DeviceParams`), the world
+it sees (:class:`World`, its :class:`Shape` parts, :class:`Vec2`, :func:`heading_vector`) and
+how it is registered; docs/devices.md walks through one.
+"""
 
 from simmer.devices.base import (
     Circle,
@@ -27,6 +32,8 @@ from simmer.devices.sensors import (
     Ultrasonic,
     UltrasonicParams,
 )
+from simmer.geometry import heading_vector
+from simmer.pose import Vec2
 
 __all__ = [
     "Axes",
@@ -49,9 +56,11 @@ __all__ = [
     "Shape",
     "Ultrasonic",
     "UltrasonicParams",
+    "Vec2",
     "World",
     "check_device_kind",
     "device_kinds",
     "get_device_kind",
+    "heading_vector",
     "register_device_kind",
 ]

@@ -212,6 +212,7 @@ class Circle:
 
 
 Shape = Segment | Circle
+"""What a device draws to show its latest measurement (:meth:`Device.shapes`)."""
 
 
 class Device:

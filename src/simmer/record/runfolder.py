@@ -42,6 +42,7 @@ import simmer
 from simmer.config.models import DEVICE_GROUPS, SimConfig
 from simmer.config.validate import DEFAULT_KIND, config_from_dict
 from simmer.devices.registry import BUILTIN_KINDS
+from simmer.ending import RunEnd
 from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
@@ -79,16 +80,6 @@ MAX_RUN_SECONDS = 3600.0
 """Simulated seconds: a recorded run stops there unless ``--seconds`` says otherwise, and a
 replay re-simulates no further unless ``--max-seconds`` says so (an hour is some 200 MB of
 replay frames; the lab's longest task takes minutes)."""
-
-ENDINGS = {
-    "quit": "stopped by hand (Esc, closing the window, Ctrl-C or a signal)",
-    "seconds": "the --seconds limit of simulated time was reached",
-    "program": "the control program exited",
-    "timeout": "the --timeout wall-clock limit was reached; the program was stopped",
-    "error": "an error stopped it",
-    "closed": "the recording was closed",
-}
-"""How a run ended, in words, by :attr:`simmer.serve.Served.ended_by` (and two of its own)."""
 
 
 class LoadedRun(NamedTuple):
@@ -526,8 +517,7 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
     first = outcome["first_collision"]
     later = f" (first at {_seconds(first)})" if first is not None else ""
     collisions = f"{_md(outcome['collisions'])}{later}"
-    ended_by = report["ended_by"]
-    ended = _md(ENDINGS.get(ended_by, ended_by) if isinstance(ended_by, str) else ended_by)
+    ended = _md(RunEnd.words_for(report["ended_by"]))
     if report["program_status"] is not None:
         ended += f" with status {_md(report['program_status'])}"
     program = f", program {_code(info['program'])}" if info["program"] else ""
@@ -659,9 +649,9 @@ class RunRecorder:
         if self._on_stop is not None:
             self._on_stop(self.stopped)
 
-    def close(self, ended_by: str = "closed", program_status: int | None = None) -> None:
+    def close(self, ended_by: RunEnd = RunEnd.CLOSED, program_status: int | None = None) -> None:
         """Stop recording: close events.jsonl and trace.csv and write the report (again:
-        nothing). ``ended_by`` says how the run ended (a key of :data:`ENDINGS`)."""
+        nothing). ``ended_by`` says how the run ended."""
         if self.closed:
             return
         self.closed = True
@@ -709,4 +699,4 @@ class RunRecorder:
         if kind is None:
             self.close()
         else:
-            self.close("quit" if issubclass(kind, KeyboardInterrupt) else "error")
+            self.close(RunEnd.QUIT if issubclass(kind, KeyboardInterrupt) else RunEnd.ERROR)

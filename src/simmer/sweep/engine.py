@@ -47,6 +47,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from simmer.ending import RunEnd
 from simmer.errors import SweepError, SweepStopped
 from simmer.proctree import adopt_orphans, descendants, still_running, stop_strays
 from simmer.record.safefile import write_bytes
@@ -155,7 +156,7 @@ def _unless_stopping(work: Work, run: RunSpec) -> RunResult:
     """In a worker: ``work(run)``, unless its sweep is stopping; then the run does not start
     (status ``stopped``, never recorded: the sweep records no row once it is stopped)."""
     if _stopping is not None and _stopping.value:
-        return RunResult(run.key(), "stopped", None, 0.0, detail="the sweep was stopped first")
+        return RunResult(run.key(), RunEnd.STOPPED, None, 0.0, detail="the sweep was stopped first")
     return work(run)
 
 
@@ -401,7 +402,7 @@ def _film_failures(
         if (r := by_key.get(run.key())) is not None
         and r["failure"]
         and r["folder"]
-        and r["status"] not in ("crashed", "invalid")  # no simulation to film
+        and r["status"] not in (RunEnd.CRASHED, RunEnd.INVALID)  # no simulation to film
     ]
     todo = [
         run
@@ -467,14 +468,14 @@ def _execute_all(
                     continue
                 except Exception as exc:
                     detail = f"the engine lost this run: {type(exc).__name__}: {exc}"
-                    result = RunResult(run.key(), "crashed", None, 0.0, None, detail)
+                    result = RunResult(run.key(), RunEnd.CRASHED, None, 0.0, None, detail)
                 record(run, result)
         if dead:
             pool.close(cancel=True)
         for run in broken:
             if run.key() in retried:
                 detail = "the worker process died during this run (twice)"
-                record(run, RunResult(run.key(), "crashed", None, 0.0, None, detail))
+                record(run, RunResult(run.key(), RunEnd.CRASHED, None, 0.0, None, detail))
             else:
                 retried.add(run.key())
                 waiting.append(run)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from simmer.ending import RunEnd
 from simmer.record.safefile import check_folder, check_target, replacing, write_bytes, write_text
 from simmer.sweep.runs import RunResult, RunSpec
 from simmer.sweep.spec import SweepSpec
@@ -457,12 +458,9 @@ def _happened(r: Mapping[str, str]) -> str:
     status = r["status"]
     if not r["time"]:
         return f"{status}: {r['detail'][-160:]}" if r["detail"] else status
-    ended = {
-        "ok": "finished",
-        "error": f"failed (exit status {r['exit_status']})" if r["exit_status"] else "failed",
-        "seconds": "simulated-time limit",
-        "timeout": "wall-clock limit",
-    }.get(status, status)
+    ended = RunEnd(status).label if status in set(RunEnd) else status
+    if status == RunEnd.ERROR and r["exit_status"]:
+        ended += f" (exit status {r['exit_status']})"
     facts = [f"{ended} at {float(r['time']):.1f} s"]
     if r["collisions"] != "0":
         collisions = _plural(int(r["collisions"]), "collision")
@@ -470,7 +468,7 @@ def _happened(r: Mapping[str, str]) -> str:
     if r["reached"] == "True":
         facts.append(f"Task 2 time {float(r['task2_time']):.1f} s")
     facts.append(f"ended at ({float(r['final_x']):.1f}, {float(r['final_y']):.1f}) in")
-    if status == "error" and r["detail"]:
+    if status == RunEnd.ERROR and r["detail"]:
         facts.append(r["detail"][-160:])
     return "; ".join(facts)
 

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from simmer.config.models import SimConfig
 from simmer.config.overrides import apply_overrides
+from simmer.ending import RunEnd
 from simmer.errors import LimitReached, WallLimitReached
 from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
 
@@ -57,8 +58,6 @@ OUTPUT_GRACE = 5.0
 escaped the run's end could hold it open: then the reader is left to finish on its own)."""
 FRAME_SCALE = 2
 """A failure's first and last frames are the window's size divided by this (HUD included)."""
-ENDED_BY = {"ok": "program", "error": "error", "seconds": "seconds", "timeout": "timeout"}
-"""A policy run's status as its run folder's report says how it ended."""
 
 
 @dataclass(frozen=True)
@@ -115,14 +114,14 @@ class RunSpec:
 @dataclass(frozen=True)
 class RunResult:
     """How one run went: its outcome (``report().as_dict()``, None if there was none) and a
-    ``status``: ``ok`` (the controller finished), ``error`` (it failed: non-zero exit status
-    or an exception), ``seconds`` (the simulated-time limit ended it), ``timeout`` (the wall
-    limit did), ``invalid`` (the overridden configuration does not validate) or ``crashed``
-    (the worker process died); ``stopped`` (the sweep stopped before it began) is never
-    recorded."""
+    ``status`` (:class:`~simmer.ending.RunEnd`): ``ok`` (the controller finished), ``error``
+    (it failed: non-zero exit status or an exception), ``seconds`` (the simulated-time limit
+    ended it), ``timeout`` (the wall limit did), ``invalid`` (the overridden configuration does
+    not validate) or ``crashed`` (the worker process died); ``stopped`` (the sweep stopped
+    before it began) is never recorded."""
 
     key: str
-    status: str
+    status: RunEnd
     outcome: dict[str, Any] | None
     wall_time: float
     exit_status: int | None = None
@@ -240,7 +239,7 @@ def execute(run: RunSpec, *, video: bool = False) -> RunResult:
                 config = build_config(run.config, run.overrides)
             except (ConfigError, KeyError) as exc:
                 return RunResult(
-                    run.key(), "invalid", None, time.perf_counter() - start, None, str(exc)
+                    run.key(), RunEnd.INVALID, None, time.perf_counter() - start, None, str(exc)
                 )
             keeping = run.keep != "nothing" and not video
             extras = _Extras(
@@ -258,7 +257,7 @@ def execute(run: RunSpec, *, video: bool = False) -> RunResult:
                     status, outcome, exit_status = _run_policy(run, sim, extras, output)
             except Exception:  # the simulator itself failed: still a row, with why
                 output.write(traceback.format_exc())
-                status, outcome, exit_status = "error", None, None
+                status, outcome, exit_status = RunEnd.ERROR, None, None
             success = succeeded(run.success, outcome)
             if extras.video is not None and extras.video.exists():
                 files["video.mp4"] = extras.video.read_bytes()
@@ -271,7 +270,8 @@ def execute(run: RunSpec, *, video: bool = False) -> RunResult:
                 WARM.give_back(run, sim)
     finally:
         tail = output.close()
-    printed = tail if status != "ok" else ""  # why a run failed; a finished run's chatter is not
+    # why a run failed; a finished run's chatter is not
+    printed = tail if status is not RunEnd.OK else ""
     elapsed = time.perf_counter() - start
     return RunResult(run.key(), status, outcome, elapsed, exit_status, printed, success, files)
 
@@ -345,7 +345,7 @@ def _frames(sim: Simulation, seed: int, output: _OutputTail) -> dict[str, bytes]
 
 def _run_program(
     run: RunSpec, sim: Simulation, extras: _Extras, output: _OutputTail
-) -> tuple[str, dict[str, Any], int | None]:
+) -> tuple[RunEnd, dict[str, Any], int | None]:
     """Serve the run headless on free ports and let the program drive it, in the run's
     folder (relative paths are the sweep file's) and writing to the run's ``output``."""
     from simmer.options import RunOptions
@@ -369,18 +369,17 @@ def _run_program(
         video=extras.video,
     )
     served = serve(sim, options, echo=lambda _line: None)
-    if served.ended_by == "quit":  # Ctrl-C or a signal stopped this worker: no result
+    if served.ended_by is RunEnd.QUIT:  # Ctrl-C or a signal stopped this worker: no result
         raise KeyboardInterrupt
     outcome = served.outcome.report().as_dict()
-    if served.ended_by == "program":
-        status = "ok" if served.exit_status == 0 else "error"
-        return status, outcome, served.exit_status
-    return {"seconds": "seconds", "timeout": "timeout"}.get(served.ended_by, "error"), outcome, None
+    program = served.ended_by is RunEnd.PROGRAM
+    exit_status = served.exit_status if program else None
+    return served.ended_by.as_result(exit_status), outcome, exit_status
 
 
 def _run_policy(
     run: RunSpec, sim: Simulation, extras: _Extras, output: _OutputTail
-) -> tuple[str, dict[str, Any], int | None]:
+) -> tuple[RunEnd, dict[str, Any], int | None]:
     """Call ``module:function`` with a client on an in-process lockstep link, what it prints
     going to the run's ``output``."""
     from simmer.client import Client
@@ -402,20 +401,20 @@ def _run_policy(
         from simmer.ui.video import VideoRecorder
 
         filming = VideoRecorder(sim, extras.video)
-    status = "ok"
+    status = RunEnd.OK
     try:
         with _wall_limit(run.wall_seconds), redirect_stdout(output), redirect_stderr(output):
             policy(Client(link, lockstep=True))
     except LimitReached as limit:
-        status = limit.status
+        status = RunEnd(limit.status)
     except Exception:
         output.write(traceback.format_exc())
-        status = "error"
+        status = RunEnd.ERROR
     finally:
         if filming is not None:
             filming.close()
         if recorder is not None:
-            recorder.close(ENDED_BY[status])
+            recorder.close(status.reported)
     return status, outcome.report().as_dict(), None
 
 
@@ -495,9 +494,9 @@ class _LimitedLink:
 
     def _check(self) -> None:
         if self.seconds is not None and self.sim.time >= self.seconds - 1e-9:
-            raise LimitReached("seconds")
+            raise LimitReached(RunEnd.SECONDS)
         if time.monotonic() >= self.deadline:
-            raise LimitReached("timeout")
+            raise LimitReached(RunEnd.TIMEOUT)
 
     def exchange(self, message: str) -> list[float]:
         """Execute one message, unless the limit has passed."""

@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping
 from functools import lru_cache
 from typing import Any
 
+from simmer.ending import RunEnd
 from simmer.errors import SweepError
 
 DEFAULT_SUCCESS = "reached and collisions == 0"
@@ -81,7 +82,7 @@ FAILURES = {
     "crashed": "the controller failed, the worker died or the configuration was invalid",
 }
 """How a run can fail (the ``failure`` column), in the order the summary shows them."""
-CRASHED_STATUSES = frozenset({"error", "crashed", "invalid"})
+CRASHED_STATUSES = frozenset({RunEnd.ERROR, RunEnd.CRASHED, RunEnd.INVALID})
 MAX_EXPRESSION_CHARS = 1000
 """Characters of a success condition: the default has 27; a longer one is not a condition
 anyone reads (and 200,000 ``not``s took gigabytes to parse)."""
@@ -108,7 +109,7 @@ def failure_kind(status: str, fields: Mapping[str, Any], success: bool) -> str:
         return "crashed"
     if fields.get("collisions"):
         return "collision"
-    if status in ("timeout", "seconds"):
+    if status in (RunEnd.TIMEOUT, RunEnd.SECONDS):
         return "timeout"
     return "condition" if fields.get("reached") else "stopped-short"
 
