@@ -40,6 +40,7 @@ INTERNAL = (
     "simmer.proctree",
     "simmer.protocol",
     "simmer.runner",
+    "simmer.scene",
     "simmer.serve",
     "simmer.transport",
     "simmer.ui",

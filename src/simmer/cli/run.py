@@ -25,6 +25,7 @@ from simmer.cli.common import (
     report_config_error,
     report_config_warnings,
 )
+from simmer.ending import RunEnd
 from simmer.errors import ConfigError, FlagError
 from simmer.options import RunOptions
 
@@ -415,16 +416,18 @@ def _say_how_it_went(served: Served, options: RunOptions, log_file: Path | None)
         report = options.record / "report.md"
         out.print(f"recorded in {options.record}; the report is {report}", markup=False)
     if options.program is not None:
-        if served.ended_by == "program":
-            ended = f"the program exited with status {served.program_status}"
-        elif served.ended_by == "seconds":
-            ended = f"the limit of {options.seconds} s of simulated time was reached"
-        elif served.ended_by == "timeout":
-            ended = (
-                f"the {options.timeout} s wall-clock timeout was reached; the program was stopped"
-            )
-        else:
-            ended = "the run was stopped"
+        match served.ended_by:
+            case RunEnd.PROGRAM:
+                ended = f"the program exited with status {served.program_status}"
+            case RunEnd.SECONDS:
+                ended = f"the limit of {options.seconds} s of simulated time was reached"
+            case RunEnd.TIMEOUT:
+                ended = (
+                    f"the {options.timeout} s wall-clock timeout was reached; "
+                    "the program was stopped"
+                )
+            case _:
+                ended = "the run was stopped"
         log = (
             "the simulator's log had no warnings and is removed"
             if log_file is None
