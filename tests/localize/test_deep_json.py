@@ -33,6 +33,7 @@ DEEP = "[" * 3000
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("ctrl_c")  # it ends the server with SIGINT
 def test_deep_shows_are_answered_and_their_log_lines_bounded(tmp_path: Path) -> None:
     log = tmp_path / "simmer.log"
     command = [sys.executable, "-m", "simmer", "run", "--headless", "--speed", "max", *FREE_PORTS]

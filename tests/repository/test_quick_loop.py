@@ -4,6 +4,7 @@ fails, saying to mark it."""
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
@@ -87,3 +88,18 @@ def test_plain_pytest_leaves_out_slow_and_fresh_tests_and_test_sh_runs_all() -> 
         addopts = tomllib.load(file)["tool"]["pytest"]["ini_options"]["addopts"]
     assert "-m 'not slow and not fresh'" in addopts
     assert '.venv/bin/pytest -m "" "$@"' in (REPO / "scripts" / "test.sh").read_text()
+
+
+SIGINT_SENT = re.compile(r"(send_signal|os\.kill|killpg|raise_signal)\([^)]*SIGINT")
+
+
+def test_every_test_file_that_sends_sigint_takes_the_ctrl_c_fixture() -> None:
+    """A process started while pytest has SIGINT ignored (started by ``nohup`` or ``cmd &``
+    in a script) ignores SIGINT too, unless the test takes ``ctrl_c``: a server a test
+    stopped with SIGINT then ran on, and the test failed on its timeout."""
+    missing = [
+        path.relative_to(REPO).as_posix()
+        for path in sorted((REPO / "tests").rglob("*.py"))
+        if SIGINT_SENT.search(text := path.read_text(encoding="utf-8")) and "ctrl_c" not in text
+    ]
+    assert missing == []
