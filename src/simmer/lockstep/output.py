@@ -95,6 +95,7 @@ class _Copy:
             if self.last not in (b"", b"\n"):
                 self.target.write("\n")
                 self.target.flush()
+                self.last = b"\n"
 
 
 class ProgramOutput:
