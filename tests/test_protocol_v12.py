@@ -11,6 +11,8 @@ import logging
 import math
 import socket
 import struct
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -21,7 +23,15 @@ from simmer import Simulation
 from simmer.client import connect
 from simmer.config import load_config
 from simmer.console import run_console
-from simmer.protocol import FramedCodec, framed_value, parse_command, unwrap_frames
+from simmer.protocol import (
+    MAX_SHOWN,
+    CommandText,
+    FramedCodec,
+    first_frame,
+    framed_value,
+    parse_command,
+    unwrap_frames,
+)
 
 from helpers import SIMMER_PY, default_data, make_config, wait_for
 
@@ -53,6 +63,58 @@ def test_frames_are_unwrapped_and_text_outside_them_ignored(
     text: str, commands: str | None
 ) -> None:
     assert unwrap_frames(text) == commands
+
+
+@pytest.mark.parametrize(
+    ("text", "framed"),
+    [
+        ("[u0]", ("u0", "")),
+        ("[u0][u1]", ("u0", "[u1]")),
+        ("hello [u0,w0:6] bye", ("u0,w0:6", " bye")),
+        ("[u0]junk[u1]\n", ("u0", "junk[u1]\n")),
+        ("[u0[u1]", ("u0[u1", "")),  # from the first '[' to the first ']' after it
+        ("u0]", None),
+        ("[u0", None),
+    ],
+)
+def test_a_request_is_its_first_frame(text: str, framed: tuple[str, str] | None) -> None:
+    assert first_frame(text) == framed
+
+
+CODEC = FramedCodec({"u0": "sensor", "u1": "sensor", "w0": "drive"})
+
+
+@pytest.mark.parametrize(
+    ("data", "commands", "dropped"),
+    [
+        (b"[u0]", "u0", ""),
+        (b"[u0]\n", "u0", ""),  # a line ending after the frame: text outside, not a frame
+        (b"hello [u1] bye", "u1", ""),
+        (b"[u0][u1]", "u0", "[u1]"),
+        (b"[u0,w0:6][u1]junk[w0:1]", "u0,w0:6", "[u1]junk[w0:1]"),
+        (b"[u0]\n[u1", "u0", "[u1"),  # a frame begun is dropped too
+    ],
+)
+def test_the_decoder_answers_the_first_frame_and_keeps_the_rest_for_the_log(
+    data: bytes, commands: str, dropped: str
+) -> None:
+    decoded = CODEC.decode(data)
+    assert isinstance(decoded, CommandText)
+    assert (decoded.text, decoded.count, decoded.dropped) == (
+        commands,
+        commands.count(",") + 1,
+        dropped,
+    )
+    assert [c.device for c in decoded.commands] == commands.replace(":6", "").split(",")
+
+
+def test_what_is_dropped_is_cut_short_for_the_log() -> None:
+    decoded = CODEC.decode(b"[u0]" + b"[u1]" * 10_000)
+    assert isinstance(decoded, CommandText)
+    assert len(decoded.dropped) == MAX_SHOWN
+    assert decoded.dropped.startswith("[u1][u1]")
+    assert decoded.dropped.endswith("...")
+    assert CODEC.encode(decoded, [39.5]) == b"[u0:39.5]"
 
 
 def test_framed_entries_as_the_original_writes_them() -> None:
@@ -114,7 +176,7 @@ def test_strict_parsing_accepts_the_v12_separator_only() -> None:
 def test_v12_client_over_two_port_gets_exactly_the_originals_replies() -> None:
     with serving(framed_sim()) as (_, link):
         assert two_port_raw(link, b"[u0]") == b"[u0:39.5]"
-        assert two_port_raw(link, b"[u0][u1]") == b"[u0:39.5,u1:3.5]"
+        assert two_port_raw(link, b"[u0][u1]") == b"[u0:39.5]"  # the first frame only
         assert two_port_raw(link, b"[u2]") == b"[u2:53.588]"
         assert two_port_raw(link, b"hello [u1] bye") == b"[u1:3.5]"
         assert two_port_raw(link, b"[zz]") == b"[zz:Not Found]"
@@ -126,6 +188,51 @@ def test_v12_client_over_two_port_gets_exactly_the_originals_replies() -> None:
         assert two_port_raw(link, b"[xx]") == b"[xx:DRIVE STOP]"
         assert two_port_raw(link, b"[r0:-90]") == b"[r0:True]"
         assert two_port_raw(link, b"[xx]") == b"[xx:DRIVE STOP]"
+
+
+TWO_FRAMES_PROGRAM = """\
+import socket
+import sys
+import time
+
+def transmit(data):
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.connect(('127.0.0.1', int(sys.argv[1])))
+        s.send(data.encode('ascii'))
+
+def receive():
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s2:
+        s2.connect(('127.0.0.1', int(sys.argv[2])))
+        return s2.recv(1024).decode('ascii')
+
+transmit('[u0][u1]')    # two frames in one message
+time.sleep(0.1)
+print(receive())
+transmit('[u1]')        # the simulator goes on serving
+time.sleep(0.1)
+print(receive())
+"""
+
+
+@pytest.mark.slow
+def test_a_v12_program_sending_two_frames_at_once_hears_the_first_as_the_original(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    program = tmp_path / "two_frames.py"
+    program.write_text(TWO_FRAMES_PROGRAM, encoding="utf-8")
+    with caplog.at_level(logging.WARNING), serving(framed_sim()) as (_, link):
+        ports = [str(link.two_port.port_rx), str(link.two_port.port_tx)]
+        done = subprocess.run(
+            [sys.executable, str(program), *ports],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["[u0:39.5]", "[u1:3.5]"]
+    (warned,) = [r.getMessage() for r in caplog.records if "more than one frame" in r.getMessage()]
+    assert "'[u1]' is not" in warned
 
 
 def test_rounding_follows_round_digits() -> None:

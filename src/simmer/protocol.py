@@ -201,6 +201,9 @@ class CommandText:
     count: int = 1
     commands: tuple[Command, ...] = ()
     size: int = 0
+    dropped: str = ""
+    """SimMeR v1.2 framed text only: the frames after the first, which are not answered (as
+    the original answered one frame per message), shortened for the log; empty if none."""
     over_limit: ClassVar[bool] = False
 
 
@@ -398,8 +401,9 @@ class PackedCodec:
 
 
 def unwrap_frames(text: str, start: str = "[", end: str = "]") -> str | None:
-    """The commands of every complete frame in ``text``, joined by commas (``[u0][u1]`` ->
-    ``u0,u1``); text outside frames is ignored; None if there is no complete frame."""
+    """The entries of every complete frame in ``text``, joined by commas (``[u0:1][u1:2]`` ->
+    ``u0:1,u1:2``), as the stock v1.2 client reads a reply; text outside frames is ignored;
+    None if there is no complete frame. (A request is its first frame: :func:`first_frame`.)"""
     parts = []
     position = 0
     while (first := text.find(start, position)) >= 0:
@@ -411,9 +415,32 @@ def unwrap_frames(text: str, start: str = "[", end: str = "]") -> str | None:
     return ",".join(parts) if parts else None
 
 
+MAX_SHOWN = 40
+"""Characters of a framed message's text quoted in a log line (longer text is cut, ``...``)."""
+
+
+def _shown(text: str) -> str:
+    """``text`` cut to :data:`MAX_SHOWN` characters for a log line."""
+    return text if len(text) <= MAX_SHOWN else text[: MAX_SHOWN - 3] + "..."
+
+
+def first_frame(text: str, start: str = "[", end: str = "]") -> tuple[str, str] | None:
+    """The commands of the first complete frame in ``text`` and the text after it, as SimMeR
+    v1.2 reads a request (``[u0][u1]`` -> ``("u0", "[u1]")``, BEHAVIOUR §6.1); None if there
+    is no complete frame."""
+    first = text.find(start)
+    if first < 0:
+        return None
+    last = text.find(end, first + len(start))
+    if last < 0:
+        return None
+    return text[first + len(start) : last], text[last + len(end) :]
+
+
 @dataclass(frozen=True)
 class FramedCodec:
     """SimMeR v1.2's framed text (BEHAVIOUR §6.1): ``[u0,w0:6]`` -> ``[u0:15.45,w0:True]``.
+    A message is its first frame: later ones are not answered (:attr:`CommandText.dropped`).
 
     ``categories`` maps each device id to ``"motor"``, ``"drive"`` or ``"sensor"``: a drive
     answers ``True`` (accepted) or ``False`` (refused, NaN), ``xx`` answers ``DRIVE STOP``, an
@@ -431,8 +458,8 @@ class FramedCodec:
     keeps: ClassVar[str] = "all"
 
     def decode(self, data: bytes) -> Decoded:
-        """The commands of the frames in ``data``; no complete frame, or a message over a
-        limit: nothing is sent back."""
+        """The commands of the first frame in ``data`` (later frames: ``dropped``); no
+        complete frame, or a message over a limit: nothing is sent back."""
         if (refused := over_limit(len(data), 0, framed=True)) is not None:
             return refused
         error = None
@@ -441,21 +468,24 @@ class FramedCodec:
         except UnicodeDecodeError as exc:
             error = _not_text(exc, self.encoding)
             text = data.decode(self.encoding, errors="replace")
-        commands = unwrap_frames(text, self.start, self.end)
-        if commands is None:
-            shown = text if len(text) <= 40 else text[:37] + "..."
+        framed = first_frame(text, self.start, self.end)
+        if framed is None:
             return Refused(
-                f"no complete frame {self.start}...{self.end} in {shown!r}; nothing is sent "
-                f"back (SimMeR v1.2 frames every message, e.g. {self.start}u0{self.end})",
+                f"no complete frame {self.start}...{self.end} in {_shown(text)!r}; nothing is "
+                f"sent back (SimMeR v1.2 frames every message, e.g. {self.start}u0{self.end})",
                 0,
             )
+        commands, rest = framed
+        later = rest.find(self.start)
+        dropped = _shown(rest[later:]) if later >= 0 else ""
         count = commands.count(",") + 1
         if (refused := over_limit(0, count, framed=True)) is not None:
             return refused
         if error is not None:
             ids = tuple(command_ids(commands))
             return Refused(error, len(ids), ids)
-        return CommandText(commands, count, tuple(parse_message(commands, lenient=self.lenient)))
+        parsed = tuple(parse_message(commands, lenient=self.lenient))
+        return CommandText(commands, count, parsed, dropped=dropped)
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:
         """One frame with an ``id:value`` entry per command, in order."""

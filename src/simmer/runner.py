@@ -216,8 +216,19 @@ class Runner:
                 return []
             case LocalizationText(text=text):
                 return self._localization(request, text)
-            case CommandText(text=text, commands=commands, size=size):
+            case CommandText(text=text, commands=commands, size=size, dropped=dropped):
                 self.clock.message(size)
+                if dropped:  # SimMeR v1.2 answered the first frame of a message only
+                    client = printable(request.client)
+                    self._log.log(
+                        client,
+                        logging.WARNING,
+                        "%s sent more than one frame in a message: the first is answered, "
+                        "%r is not (SimMeR v1.2 answers one frame per message: send each "
+                        "on its own, or put all the commands in one frame)",
+                        client,
+                        dropped,
+                    )
                 answers = self.sim.answer(commands or self.sim.parse(text), text, request.client)
                 replies = [answer.value for answer in answers]
                 if records := [(a.level, a.why) for a in answers if a.why is not None]:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import logging
 import signal
+import subprocess
+import sys
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -22,6 +24,7 @@ from simmer.lockstep import (
     program_environment,
     runs_python,
 )
+from simmer.lockstep.output import ENCODING, ProgramOutput
 from simmer.options import RunOptions
 from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder
@@ -101,6 +104,33 @@ def _stop_on_signals(
     return restore
 
 
+class _Said:
+    """Where the run's own lines go: said at once, except while a program's printout passes
+    through (:meth:`hold`, from just before it starts until its pipes are drained): then they
+    are kept, and said in order by :meth:`release`, so no line of the program's is split by
+    one of SimMeR's, and what is said after the program does not depend on when it wrote."""
+
+    def __init__(self, echo: Callable[[str], None]) -> None:
+        self._echo = echo
+        self._held: list[str] | None = None
+
+    def __call__(self, line: str) -> None:
+        if self._held is None:
+            self._echo(line)
+        else:
+            self._held.append(line)
+
+    def hold(self) -> None:
+        """Keep the lines said from now on."""
+        self._held = []
+
+    def release(self) -> None:
+        """Say the lines kept, and say lines at once again."""
+        held, self._held = self._held or [], None
+        for line in held:
+            self._echo(line)
+
+
 @dataclass
 class Served:
     """How a run served by :func:`serve` went."""
@@ -144,7 +174,10 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     :attr:`Served.recording_stopped` says so. When the run ends, every process the program
     started is stopped, however it detached (:mod:`simmer.proctree`). With ``answer``, the
     program's standard input is that text, a line, then its end (what a student types at
-    the program's ``input()`` prompt: the project's target zone).
+    the program's ``input()`` prompt: the project's target zone). Unless ``program_output``
+    says where, the program's output and error pass through this process's own
+    (:mod:`simmer.lockstep.output`), and what is said through ``echo`` from the program's start
+    until its last output is shown is said after it, each line whole.
 
     Raises ``OSError`` if a port cannot be opened, the program cannot be started or the
     ``record`` folder cannot be written (FileExistsError if it holds a run already), and
@@ -157,7 +190,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     outcome = Outcome.attach(sim)
     stop = RunStop()
     ended: list[RunEnd] = []  # who stopped the run first
+    said = _Said(echo)
     started: Program | None = None
+    printouts: list[ProgramOutput] = []  # the program's, passing through
     # This process's descendants before the program started: what is not among them at
     # the end is the program's, even if Ctrl-C landed before ``started`` held it.
     before: set[int] | None = None
@@ -173,48 +208,52 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                     used = options.replace(
                         link_delay=runner.link_delay if options.lockstep else None
                     )
-                    recorder = RunRecorder(sim, options.record, used, outcome, on_stop=_say(echo))
-                    echo(f"recording the run into {options.record}")
+                    recorder = RunRecorder(sim, options.record, used, outcome, on_stop=_say(said))
+                    said(f"recording the run into {options.record}")
                 if options.video is not None:
                     from simmer.ui.video import VideoRecorder
 
                     filming = VideoRecorder(sim, options.video, controls=runner)
-                    echo(f"recording a video into {options.video}")
+                    said(f"recording a video into {options.video}")
                 for line in transports.describe():
-                    echo(line)
+                    said(line)
                 if options.lockstep:
-                    echo(
+                    said(
                         f"lockstep clock: simulated time advances only when the program sleeps, "
                         f"and {runner.link_delay:g} s per message"
                     )
                     if options.program is not None and not runs_python(options.program):
-                        echo(NOT_PYTHON.format(command=options.program))
-                if options.program is not None:
-                    before = descendants()
-                    started = _start_program(
-                        options, transports, sim.config, runner.bus, stop, ended, echo
-                    )
-                    sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.steps, options.program))
-                if options.window:
-                    from simmer.ui import run_window
-
-                    run_window(runner, until=options.seconds, stop=stop, echo=echo)
-                else:
+                        said(NOT_PYTHON.format(command=options.program))
+                if not options.window:
                     pace = (
                         "as fast as possible"
                         if options.speed is None
                         else f"{options.speed:g}x real time"
                     )
-                    echo(f"running headless, {pace}; Ctrl-C to stop")
+                    said(f"running headless, {pace}; Ctrl-C to stop")
+                if options.program is not None:
+                    said(f"starting the program: {options.program}")
+                    said.hold()  # the program's printout only, until it is over
+                    before = descendants()
+                    started = _start_program(
+                        options, transports, sim.config, runner.bus, stop, ended, printouts
+                    )
+                    sim.emit(RunEvent(sim.time, "program-start", 0.0, sim.steps, options.program))
+                if options.window:
+                    from simmer.ui import run_window
+
+                    shown = said if options.program is None else None  # not after the program
+                    run_window(runner, until=options.seconds, stop=stop, echo=shown)
+                else:
                     runner.run(stop_event=stop, until=options.seconds)
                 if signalled:
-                    echo(f"stopped ({signalled[0]})")
+                    said(f"stopped ({signalled[0]})")
                     ended.insert(0, RunEnd.QUIT)
                 elif not ended:
                     limit = options.seconds is not None and sim.time >= options.seconds - 1e-9
                     ended.append(RunEnd.SECONDS if limit else RunEnd.QUIT)
         except KeyboardInterrupt:
-            echo("stopped")
+            said("stopped")
             ended.append(RunEnd.QUIT)
         except BaseException:
             ended.append(RunEnd.ERROR)
@@ -227,8 +266,11 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                 started.stop()
             if before is not None:
                 stop_strays(before)
+            for printout in printouts:  # all of it shown, its last line ended
+                printout.finish()
+            said.release()
             if filming is not None:
-                _finish_video(filming, echo)
+                _finish_video(filming, said)
         status = (
             started.process.returncode
             if started is not None and ended[0] is RunEnd.PROGRAM
@@ -273,10 +315,13 @@ def _start_program(
     bus: CommandBus,
     stop: threading.Event,
     ended: list[RunEnd],
-    echo: Callable[[str], None],
+    printouts: list[ProgramOutput],
 ) -> Program:
     """Start the control program of ``options`` on this run's ports; a thread ends the run
-    when it exits or at the wall-clock ``timeout`` (then stopping its whole process tree)."""
+    when it exits or at the wall-clock ``timeout`` (then stopping its whole process tree).
+    Unless ``options`` give it an output of its own (a sweep's), its standard output and
+    error are pipes, copied to this process's from the start (added to ``printouts``, so
+    that the run drains them however it ends)."""
     ports = {
         "port_rx": transports.two_port.port_rx,
         "port_tx": transports.two_port.port_tx,
@@ -289,10 +334,17 @@ def _start_program(
         env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
     assert options.program is not None
     command, timeout = options.program, options.timeout
+    output = options.program_output
+    if output is None and sys.stdout is not None and sys.stderr is not None:
+        output = subprocess.PIPE  # one pipe each for its output and its error
+        env.setdefault("PYTHONIOENCODING", ENCODING)
+        sys.stdout.flush()  # what SimMeR said so far goes first
+        sys.stderr.flush()
     program = Program.start(
-        command, env, options.answer, folder=options.program_folder, output=options.program_output
+        command, env, options.answer, folder=options.program_folder, output=output
     )
-    echo(f"started the program: {command}")
+    if program.process.stdout is not None and sys.stdout is not None and sys.stderr is not None:
+        printouts.append(ProgramOutput(program.process, sys.stdout, sys.stderr))
 
     def watch() -> None:
         status = program.wait(timeout)

@@ -328,7 +328,7 @@ def test_a_device_id_the_original_ran_warns_and_is_unreachable_as_there(
     assert (warning.key, warning.line) == ("sensors.90.0 deg", line_of(path, "'90.0 deg'"))
     assert "no command can reach it" in warning.message
     with serving(Simulation(config, seed=3)) as (_, link):
-        reply = two_port_raw(link, b"[0.0 deg][u0]" if expected else b"90.0 deg,u0")
+        reply = two_port_raw(link, b"[0.0 deg,u0]" if expected else b"90.0 deg,u0")
     if expected is None:  # v1.0: 8-byte doubles, NaN for a device not found
         first, second = struct.unpack("<2d", reply)
         assert math.isnan(first)

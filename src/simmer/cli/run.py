@@ -508,11 +508,12 @@ def _check_video(path: Path, *, force: bool) -> None:
 
 
 class _RunLog:
-    """The simulator's log during a ``--program`` run, in a file of its own so that the
-    program's printout is not mixed with it. The file is made by :func:`tempfile.mkstemp`:
-    a name nobody can know beforehand, created only if nothing is there (the old
-    ``simmer-PID.log`` followed a link planted at that name, and one was left per run). It
-    is removed when the run ends unless it holds a warning or an error (:meth:`finish`)."""
+    """The simulator's log during a ``--program`` run (Python's warnings too), in a file of its
+    own so that the program's printout is not mixed with it. The file is made by
+    :func:`tempfile.mkstemp`: a name nobody can know beforehand, created only if nothing is
+    there (the old ``simmer-PID.log`` followed a link planted at that name, and one was left
+    per run). It is removed when the run ends unless it holds a warning or an error
+    (:meth:`finish`)."""
 
     def __init__(self) -> None:
         import tempfile
@@ -532,6 +533,7 @@ class _RunLog:
         for old in self._previous:
             root.removeHandler(old)
         root.addHandler(self._handler)
+        logging.captureWarnings(True)  # a library's warning too: not in the program's printout
 
     def _note(self, record: logging.LogRecord) -> bool:
         if record.levelno >= logging.WARNING:
@@ -541,6 +543,7 @@ class _RunLog:
     def finish(self) -> Path | None:
         """Close the file and give the log back to where it went before; the file if it is
         kept (it holds a warning or an error), else None (it is removed)."""
+        logging.captureWarnings(False)
         root = logging.getLogger()
         root.removeHandler(self._handler)
         for old in self._previous:
