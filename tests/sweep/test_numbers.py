@@ -64,7 +64,7 @@ def loaded(folder: Path, body: str) -> SweepSpec | None:
 
 
 @settings(
-    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(kind=st.sampled_from(["uniform", "normal"]), first=NUMBERS, second=NUMBERS)
 def test_a_distributions_numbers_draw_or_are_refused(
