@@ -26,6 +26,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
 
 SHAPES = REPO / "tests" / "fixtures" / "shapes"
 V10 = {"reply_bytes": 8}
+V11 = {"reply_bytes": 4}
 V12 = {"protocol": "framed", "str_encoding": "ascii"}
 
 
@@ -110,4 +111,46 @@ def test_a_busy_wait_on_a_serial_ports_in_waiting(
     )
     lines = printed.splitlines()
     assert lines[0].startswith("Ultrasonic 0: [('u0', ")
+    assert lines[-1] == "done"
+
+
+def test_a_library_that_reads_the_clock_before_the_first_message(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # pygame.font.SysFont runs fc-list and reads the clock many times meanwhile: those reads
+    # are the library's, so they never move the clock and the first message is at step 0.
+    events, _trace, printed = five_runs(tmp_path, str(SHAPES / "font_first.py"), V11, capfd)
+    first = next(json.loads(line) for line in events.splitlines() if '"command"' in line)
+    assert (first["step"], first["message"]) == (0, "u0,u1")
+    assert '"peek"' not in events  # a library's reads are not recorded
+    assert printed.splitlines()[-1] == "done"
+
+
+def test_select_with_a_timeout(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
+    # A reply is ready for the first select after its message (no timeout spent waiting for
+    # it); a select with nothing to come is a tenth of a simulated second.
+    events, _trace, printed = five_runs(tmp_path, str(SHAPES / "select_timeout.py"), {}, capfd)
+    lines = printed.splitlines()
+    assert lines[0].startswith("Readings:")
+    assert lines[0].endswith("] 0")  # no select timed out before the reply was there
+    assert lines[-1] == "done"
+    ticks = sum(int(line.split()[2]) for line in lines if line.startswith("Stopped after"))
+    sleeps = [json.loads(e)["value"] for e in events.splitlines() if '"sleep"' in e]
+    assert sleeps == [0.1] * ticks  # each select that timed out: 0.1 simulated seconds
+
+
+def test_a_socket_timeout(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
+    # recv with a timeout: the reply first, then a timeout of 0.2 simulated seconds.
+    events, _trace, printed = five_runs(tmp_path, str(SHAPES / "socket_timeout.py"), {}, capfd)
+    sleeps = [json.loads(e)["value"] for e in events.splitlines() if '"sleep"' in e]
+    assert sleeps
+    assert set(sleeps) == {0.2}
+    assert printed.splitlines()[-1] == "done"
+
+
+def test_an_asyncio_client(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
+    # asyncio.sleep and wait_for go through the selectors: simulated time.
+    _events, _trace, printed = five_runs(tmp_path, str(SHAPES / "asyncio_client.py"), {}, capfd)
+    lines = printed.splitlines()
+    assert lines[0].startswith("Readings: [")
     assert lines[-1] == "done"

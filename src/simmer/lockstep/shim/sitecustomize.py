@@ -25,12 +25,13 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
 * Clock reads made by the standard library's or an installed package's code (the caller's
   file says which) never move the clock and are not counted as reads (``!peek``): how often
   a library reads the clock is its business, not the program's.
-* Polls wait in simulated time: ``select``/``selectors`` with a timeout, a socket with a
-  timeout or non-blocking, a serial port's ``in_waiting``. Each first makes sure that
-  everything written was taken and that every reply byte the simulator has sent has arrived
-  (the clock message's `` +`` answers how many it sent), so the first poll after a reply sees
-  it whatever the machine's speed; then, if nothing is ready, a timeout is a sleep of that
-  long, and a zero-timeout poll counts as a clock read (the busy-wait rule).
+* Polls on the simulator's connections wait in simulated time: ``select``/``selectors``
+  with a timeout, a socket with a timeout or non-blocking, a serial port's ``in_waiting``.
+  Each first makes sure that everything written was taken and that every reply byte the
+  simulator has sent has arrived (the clock message's `` +`` answers how many it sent), so
+  the first poll after a reply sees it whatever the machine's speed; then, if nothing is
+  ready, a timeout is a sleep of that long, and a zero-timeout poll counts as a clock read
+  (the busy-wait rule). A wait on anything else (a child's pipes) is a wall-clock wait.
 * Threads: simulated time moves only when every thread of the program is waiting for it.
   After its sleep (or a read that moved the clock), a thread returns only when every reply
   byte sent has arrived, no two-port reply waits for a thread that polls the reply port, and
@@ -621,16 +622,16 @@ def _fd(item: Any) -> int:
 
 
 def _patch_select(program: _Program, ours: Callable[[int], bool]) -> None:
-    """``select.select`` and the ``selectors`` wait in simulated time (module doc): with a
-    timeout, always (a timeout is simulated time); without one, after waiting for the bytes
-    on their way to the simulator's connections."""
+    """``select.select`` and the ``selectors``, on a connection to the simulator, wait in
+    simulated time (module doc); on anything else (a child process's pipes, the standard
+    input) they wait as Python would."""
 
     def select_(
         rlist: Iterable[Any], wlist: Iterable[Any], xlist: Iterable[Any], timeout: Any = None
     ) -> Any:
         rlist, wlist, xlist = list(rlist), list(wlist), list(xlist)
-        if timeout is None and not any(ours(_fd(item)) for item in rlist):
-            return _REAL_SELECT(rlist, wlist, xlist)
+        if not any(ours(_fd(item)) for item in rlist + wlist + xlist):
+            return _REAL_SELECT(rlist, wlist, xlist, timeout)  # a wait on something else
 
         def ready() -> bool:
             return any(_REAL_SELECT(rlist, wlist, xlist, 0))
@@ -659,8 +660,8 @@ def _patch_selector(cls: Any, program: _Program, ours: Callable[[int], bool]) ->
     real = cls.select
 
     def select_(self: Any, timeout: float | None = None) -> Any:
-        if timeout is None and not any(ours(key.fd) for key in self.get_map().values()):
-            return real(self, None)
+        if not any(ours(key.fd) for key in self.get_map().values()):
+            return real(self, timeout)  # a wait on something else (a child's pipes)
         wait = None if timeout is None else max(float(timeout), 0.0)
         if program.poll(lambda: bool(real(self, 0)), wait) or timeout is not None:
             return real(self, 0)
