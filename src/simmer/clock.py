@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -52,6 +53,8 @@ class Wait:
     request: Request
     until: float | None
     deadline: float = math.inf
+    counts: bool = False
+    """Answer with the counts too (the message's `` +``, :meth:`_Counted.answer`)."""
 
 
 class Clock(Protocol):
@@ -80,6 +83,14 @@ class Clock(Protocol):
 
     def took(self, size: int) -> None:
         """Count ``size`` bytes of a program's messages as taken (any thread)."""
+        ...
+
+    def gave(self, size: int) -> None:
+        """Count ``size`` bytes sent to the clients (any thread)."""
+        ...
+
+    def owes(self, count: Callable[[], int]) -> None:
+        """``count()`` says how many replies wait to be collected (a two-port server's)."""
         ...
 
     def message(self, size: int) -> None:
@@ -119,6 +130,9 @@ class _Counted:
         self.waits: list[Wait] = []
         self._taken = 0
         self._lock = threading.Lock()
+        self.sent = 0
+        """Bytes sent to the clients so far (:meth:`gave`)."""
+        self._owed: list[Callable[[], int]] = []
 
     @property
     def taken(self) -> int:
@@ -136,14 +150,35 @@ class _Counted:
             with self._lock:
                 self._taken += size
 
+    def gave(self, size: int) -> None:
+        """Count ``size`` bytes sent to the clients (a transport's thread may call it)."""
+        if size > 0:
+            with self._lock:
+                self.sent += size
+
+    def owes(self, count: Callable[[], int]) -> None:
+        """Add ``count`` to what says how many replies wait to be collected."""
+        self._owed.append(count)
+
+    def answer(self, request: Request, value: float, counts: bool) -> None:
+        """Answer a clock message with the time ``value``; with ``counts``, also the bytes
+        sent to the clients so far and the replies waiting to be collected (the shim's
+        `` +``: whether a reply is still on its way to the program)."""
+        if counts:
+            owed = sum(count() for count in self._owed)
+            request.future.set_result([value, float(self.sent), float(owed)])
+        else:
+            request.future.set_result([value])
+
     def moving(self, wait: Wait) -> bool:
         """Whether an ``!idle`` wait still waits: a drive moves and its deadline is ahead."""
         return self.sim.robot.any_drive_moving and self.sim.time < wait.deadline - EPSILON
 
     def emit(self, clock: ClockMessage) -> None:
-        """Record the clock message in the run's events, if anyone listens."""
+        """Record the clock message in the run's events, if anyone listens (not a ``!peek``:
+        a library's read changes nothing, and how many a library makes is its own business)."""
         sim = self.sim
-        if sim.observers:
+        if sim.observers and clock.kind != "peek":
             asked = clock.seconds if clock.kind == "sleep" else math.nan
             sim.emit(RunEvent(sim.time, "clock", asked, sim.steps, clock.kind))
 
@@ -164,11 +199,11 @@ class RealTimeClock(_Counted):
         self.emit(clock)
         sim = self.sim
         if clock.kind == "sleep":
-            self.waits.append(Wait(request, sim.time + clock.seconds))
+            self.waits.append(Wait(request, sim.time + clock.seconds, counts=clock.counts))
         elif clock.kind == "idle":
-            self.waits.append(Wait(request, None, sim.time + IDLE_LIMIT))
+            self.waits.append(Wait(request, None, sim.time + IDLE_LIMIT, clock.counts))
         else:
-            request.future.set_result([sim.time])
+            self.answer(request, sim.time, clock.counts)
 
     def holding(self) -> bool:
         """Never: the wall clock steps the simulation whatever is held."""
@@ -190,7 +225,7 @@ class RealTimeClock(_Counted):
         for wait in self.waits:
             done = not self.moving(wait) if wait.until is None else sim.time >= wait.until - EPSILON
             if done:
-                wait.request.future.set_result([sim.time])
+                self.answer(wait.request, sim.time, wait.counts)
             else:
                 waiting.append(wait)
         self.waits = waiting
@@ -222,23 +257,24 @@ class LockstepClock(_Counted):
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Advance the program's clock as the message asks and wait until the simulation is
         there: ``!sleep S`` by S, ``!idle`` until no drive moves, a read by nothing (but the
-        :data:`~simmer.lockstep.FREE_TIME_READS`-th in a row by one step)."""
+        :data:`~simmer.lockstep.FREE_TIME_READS`-th in a row by one step; ``!peek`` and
+        ``!sync`` never)."""
         self.emit(clock)
         sim = self.sim
         self.time = max(self.time, sim.time)
         if clock.kind == "idle":
             self._reads = 0
-            self.waits.append(Wait(request, None, sim.time + IDLE_LIMIT))
+            self.waits.append(Wait(request, None, sim.time + IDLE_LIMIT, clock.counts))
             return
         if clock.kind == "sleep" and clock.seconds > 0:
             self._reads = 0
             self.time += clock.seconds
-        elif clock.kind != "sync":  # a clock read (or sleep(0)): free, unless only waited on
+        elif clock.kind not in ("sync", "peek"):  # a read (or sleep(0)): free unless waited on
             self._reads += 1
             if self._reads > FREE_TIME_READS:
                 self._reads = 0
                 self.time += sim.dt
-        self.waits.append(Wait(request, self.time))
+        self.waits.append(Wait(request, self.time, counts=clock.counts))
 
     def holding(self) -> bool:
         """While the simulation has not caught up with the clock."""
@@ -300,7 +336,7 @@ class LockstepClock(_Counted):
                 done = (sim.steps + 1) * sim.dt > wait.until + EPSILON
                 value = wait.until
             if done:
-                wait.request.future.set_result([value])
+                self.answer(wait.request, value, wait.counts)
             else:
                 waiting.append(wait)
         self.waits = waiting

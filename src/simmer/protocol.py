@@ -557,26 +557,34 @@ CLOCK_PREFIX = b"!"
 @dataclass(frozen=True)
 class ClockMessage:
     """``!sleep S`` (advance S seconds), ``!idle`` (until no drive moves), ``!time`` (the
-    clock) or ``!sync`` (nothing but the ``after`` condition).
+    clock), ``!peek`` (the clock, never advancing it nor counted as a read, not recorded: a
+    library's read) or ``!sync`` (nothing but the ``after`` condition).
 
     ``after`` (written `` @N`` at the end) is how many bytes the program has written towards
     the simulator on its other connections so far: the simulator acts on the clock message
     only once it has taken and answered that many, so a message the program sent before it
     slept is acted on before the sleep, whichever connection arrives first. None: no condition.
+    ``counts`` (a last word ``+``): the answer has two more values, the bytes the simulator has
+    sent to its clients so far and the two-port replies waiting to be collected, so that the
+    lockstep shim can tell whether a reply is still on its way to the program.
     """
 
     kind: str
     seconds: float = 0.0
     after: int | None = None
+    counts: bool = False
 
 
-CLOCK_KINDS = ("time", "idle", "sync")
+CLOCK_KINDS = ("time", "idle", "sync", "peek")
 """Clock messages without an argument (``!sleep`` takes the seconds)."""
 
 
 def parse_clock(text: str) -> ClockMessage:
     """Parse a clock message; raises ``ValueError`` saying what is wrong."""
     words = text.strip().lstrip("!").split()
+    counts = len(words) > 1 and words[-1] == "+"
+    if counts:
+        words.pop()
     after = None
     if len(words) > 1 and words[-1].startswith("@"):
         count = words.pop()[1:]
@@ -585,18 +593,18 @@ def parse_clock(text: str) -> ClockMessage:
         else:
             words = []  # refused below
     if len(words) == 1 and words[0] in CLOCK_KINDS:
-        return ClockMessage(words[0], after=after)
+        return ClockMessage(words[0], after=after, counts=counts)
     if len(words) == 2 and words[0] == "sleep" and _NUMBER.fullmatch(words[1]):
         seconds = float(words[1])
         if 0 <= seconds <= MAX_ABS_VALUE:
-            return ClockMessage("sleep", seconds, after)
+            return ClockMessage("sleep", seconds, after, counts)
         raise ValueError(
             f"{printable(text)!r}: a sleep of {words[1]} s is refused; it must be 0 to "
             f"{MAX_ABS_VALUE:g} s of simulated time (MAX_ABS_VALUE, as a command's value)"
         )
     raise ValueError(
-        f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time' or "
-        "'!sync', each optionally followed by ' @BYTES'"
+        f"{printable(text)!r} is not a clock message: '!sleep SECONDS', '!idle', '!time', "
+        "'!peek' or '!sync', each optionally followed by ' @BYTES' and then ' +'"
     )
 
 

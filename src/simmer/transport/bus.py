@@ -40,10 +40,19 @@ __all__ = [
 class ByteCounter(Protocol):
     """Where a transport reports the bytes of a program's messages it reads and sets aside
     (text outside frames, a ``?`` line): the run's clock (:class:`simmer.clock.Clock`), which
-    a clock message's `` @N`` waits on (see :func:`simmer.protocol.parse_clock`)."""
+    a clock message's `` @N`` waits on (see :func:`simmer.protocol.parse_clock`); and the
+    bytes it sends and the replies it holds, which a clock message's `` +`` asks for."""
 
     def took(self, size: int) -> None:
         """Count ``size`` bytes as taken (any thread)."""
+        ...
+
+    def gave(self, size: int) -> None:
+        """Count ``size`` bytes sent to a client (any thread)."""
+        ...
+
+    def owes(self, count: Callable[[], int]) -> None:
+        """``count()`` says how many replies wait to be collected (loop thread)."""
         ...
 
 

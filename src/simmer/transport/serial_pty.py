@@ -291,6 +291,8 @@ class SerialServer:
         except BlockingIOError:
             return
         del self._outbox[:written]
+        if self.clock is not None:
+            self.clock.gave(written)
 
     def close(self) -> None:
         """Stop serving, remove the link and close the pseudo-terminal."""

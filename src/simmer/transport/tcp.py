@@ -171,6 +171,8 @@ class _Connection:
             except OSError:  # the client has gone
                 self.close()
                 return
+            if self.server.clock is not None:
+                self.server.clock.gave(sent)
             if data:
                 self.outbox += data[sent:]
             else:
@@ -238,8 +240,12 @@ class _Server:
         ports: list[int],
         timeout: float = 300.0,
         idle_timeout: float | None = None,
+        clock: ByteCounter | None = None,
     ) -> None:
         self.bus = bus
+        self.clock = clock
+        """Where the bytes sent (and any set aside) are counted (None: nowhere, a server off
+        any run's clock)."""
         self.timeout = timeout
         self.idle_timeout = idle_timeout
         """Seconds a connection may sit between messages (None: no limit)."""
@@ -459,8 +465,11 @@ class TwoPortServer(_Server):
         *,
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
+        clock: ByteCounter | None = None,
     ) -> None:
-        super().__init__(bus, host, [port_rx, port_tx], timeout)
+        super().__init__(bus, host, [port_rx, port_tx], timeout, clock=clock)
+        if clock is not None:
+            clock.owes(lambda: len(self.pending))
         self.port_rx, self.port_tx = self.ports
         self.codec: ReplyCodec = codec if codec is not None else PackedCodec()
         self.pending: deque[_Pending] = deque()  # replies (or their futures) nobody collected
@@ -678,10 +687,7 @@ class StreamServer(_Server):
         lenient: bool = False,
         clock: ByteCounter | None = None,
     ) -> None:
-        super().__init__(bus, host, [port], timeout, idle_timeout)
-        self.clock = clock
-        """Where the bytes of ``?`` lines are counted (None: nowhere, a server off any run's
-        clock)."""
+        super().__init__(bus, host, [port], timeout, idle_timeout, clock)
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding

@@ -56,6 +56,7 @@ class Transports:
             port_tx,
             codec=codec,
             timeout=settings.timeout,
+            clock=clock,
         )
         self.serial: SerialServer | None = None
         try:

@@ -22,8 +22,25 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
   out of that count: the simulator takes them when it accepts the reply connection (a
   program that reads its reply before closing its send connection).
 
+* Clock reads made by the standard library's or an installed package's code (the caller's
+  file says which) never move the clock and are not counted as reads (``!peek``): how often
+  a library reads the clock is its business, not the program's.
+* Polls on the simulator's connections wait in simulated time: ``select``/``selectors``
+  with a timeout, a socket with a timeout or non-blocking, a serial port's ``in_waiting``.
+  Each first makes sure that everything written was taken and that every reply byte the
+  simulator has sent has arrived (the clock message's `` +`` answers how many it sent), so
+  the first poll after a reply sees it whatever the machine's speed; then, if nothing is
+  ready, a timeout is a sleep of that long, and a zero-timeout poll counts as a clock read
+  (the busy-wait rule). A wait on anything else (a child's pipes) is a wall-clock wait.
+* Threads: simulated time moves only when every thread of the program is waiting for it.
+  After its sleep (or a read that moved the clock), a thread returns only when every reply
+  byte sent has arrived, no two-port reply waits for a thread that polls the reply port, and
+  every other thread is back in a wait (a sleep, a poll, a read on the simulator with
+  nothing due, a lock or queue), at most :data:`SETTLE_WAIT` wall seconds.
+
 Only the standard library is used, so the program starts as fast as it would by hand. If the
-program's environment has a ``sitecustomize`` of its own, it is run afterwards.
+program's environment has a ``sitecustomize`` of its own, it is run afterwards. The syntax
+stays that of Python 3.8.
 """
 
 from __future__ import annotations
@@ -31,14 +48,26 @@ from __future__ import annotations
 import functools
 import math
 import os
+import select
+import selectors
 import socket
 import struct
 import sys
+import sysconfig
 import threading
 import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
+
+try:
+    import fcntl
+    import termios
+
+    _FIONREAD: int | None = termios.FIONREAD
+except ImportError:  # Windows: no byte counts, no waiting for them
+    fcntl = None  # type: ignore[assignment]
+    _FIONREAD = None
 
 _HEADER = struct.Struct("<BH")
 MAX_SLEEP = 1e9
@@ -46,7 +75,39 @@ MAX_SLEEP = 1e9
 module imports nothing of SimMeR's). A longer one raises OverflowError here, as Python's own
 ``time.sleep`` does past its limit: said at the call, in the program's traceback, rather than
 a "refused clock message" from the simulator's log."""
+SETTLE_WAIT = 5.0
+"""Wall seconds a thread whose sleep is over waits for the program to settle (every reply
+byte arrived, every other thread back in a wait). A thread that never waits (it computes, or
+blocks on something else than the simulator) would otherwise hold every sleep; past this the
+clock goes on without it, said once, and it is not waited for again."""
 _LOCAL = {"127.0.0.1", "localhost", "::1"}
+_REAL_SLEEP = time.sleep
+_REAL_IOCTL = fcntl.ioctl if fcntl is not None else None
+_REAL_SELECT = select.select
+
+
+def _library_folders() -> tuple[str, ...]:
+    """Folders whose code is a library's, not the program's: the standard library, the
+    installed packages, and this shim."""
+    folders = {os.path.dirname(os.path.abspath(__file__))}
+    for name in ("stdlib", "platstdlib", "purelib", "platlib"):
+        path = sysconfig.get_paths().get(name)
+        if path:
+            folders.add(os.path.abspath(path))
+    for path in sys.path:
+        if path.endswith(("site-packages", "dist-packages")):
+            folders.add(os.path.abspath(path))
+    return tuple(folder + os.sep for folder in folders)
+
+
+def _inq(fd: int) -> int:
+    """Bytes waiting to be read on ``fd`` (0 where that cannot be asked)."""
+    if _REAL_IOCTL is None or _FIONREAD is None or fd < 0:
+        return 0
+    try:
+        return int(struct.unpack("i", _REAL_IOCTL(fd, _FIONREAD, b"\0\0\0\0"))[0])
+    except OSError:
+        return 0
 
 
 class _Clock:
@@ -57,9 +118,13 @@ class _Clock:
         self._connect = connect
         self._sock: socket.socket | None = None
         self._lock = threading.Lock()
+        self.before = 0
+        """Bytes of the answers read before the last one (the simulator's count of bytes
+        sent, in the last answer, includes these and not that answer)."""
+        self._read_total = 0
 
-    def ask(self, message: str) -> float:
-        """Send a clock message and return the simulated time it answers with."""
+    def ask(self, message: str) -> list[float]:
+        """Send a clock message; its answer's values (the simulated time first)."""
         with self._lock:
             if self._sock is None:
                 sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
@@ -69,12 +134,14 @@ class _Clock:
             self._sock.sendall(message.encode("ascii") + b"\n")
             width, count = _HEADER.unpack(self._read(_HEADER.size))
             values = self._read(width * count)
-        if count != 1 or width not in (4, 8):
+            self.before = self._read_total
+            self._read_total += _HEADER.size + width * count
+        if count not in (1, 3) or width not in (4, 8):
             raise RuntimeError(f"SimMeR answered {message!r} with {count} values of {width} bytes")
-        (value,) = struct.unpack("<d" if width == 8 else "<f", values)
-        if math.isnan(value):  # the simulator refused it
+        answer = [float(v) for (v,) in struct.iter_unpack("<d" if width == 8 else "<f", values)]
+        if math.isnan(answer[0]):  # the simulator refused it
             raise RuntimeError(f"SimMeR refused the clock message {message!r}; see its log")
-        return float(value)
+        return answer
 
     def _read(self, size: int) -> bytes:
         assert self._sock is not None
@@ -100,13 +167,16 @@ class _Written:
         self.two_port: weakref.WeakKeyDictionary[socket.socket, int] = weakref.WeakKeyDictionary()
         """Bytes written on each two-port message connection (one closed is left out)."""
 
-    def ask(self, message: str, written: int | None = None) -> float:
+    def ask(self, message: str, written: int | None = None) -> list[float]:
         """A clock message carrying the count (default: every byte written so far): the
-        simulator acts on it once it has taken that many."""
+        simulator acts on it once it has taken that many. Its answer's values."""
         written = self.total if written is None else written
-        value = self.clock.ask(f"{message} @{written}")
+        counts = message.endswith(" +")
+        if counts:
+            message = message[:-2]
+        answer = self.clock.ask(f"{message} @{written}" + (" +" if counts else ""))
         self.confirmed = max(self.confirmed, written)
-        return value
+        return answer
 
     def sync_before_reply(self) -> None:
         """A reply connection is about to open: wait until the simulator has taken everything
@@ -115,14 +185,14 @@ class _Written:
         still_open = sum(size for sock, size in list(self.two_port.items()) if sock.fileno() >= 0)
         written = self.total - still_open
         if written > self.confirmed:
-            self.ask("!sync", written)
+            self.ask("!peek", written)
 
     def before(self, key: Any) -> None:
         """About to write on connection ``key``: first let the simulator take what was
         written on another one."""
         last = self.last() if isinstance(self.last, weakref.ref) else self.last
         if last != key and self.total > self.confirmed:
-            self.ask("!sync")
+            self.ask("!peek")
 
     def wrote(self, key: Any, size: int) -> None:
         with self.lock:
@@ -130,6 +200,245 @@ class _Written:
             if key in self.two_port:
                 self.two_port[key] += max(size, 0)
         self.last = weakref.ref(key) if isinstance(key, socket.socket) else key
+
+
+class _Program:
+    """What the shim knows of the program: the simulated time it last saw, the bytes that
+    arrived from the simulator, its threads' waits (module doc)."""
+
+    def __init__(self, written: _Written) -> None:
+        self.written = written
+        self.now = 0.0
+        self.cond = threading.Condition()
+        self.moves = 0
+        """How many times the clock was seen to move (a reply poller waits for the next)."""
+        self.waits: dict[int, Any] = {}
+        """Threads in a wait with nothing due: None, or the socket or fd it reads."""
+        self.pollers: set[int] = set()
+        """Threads that opened a two-port reply connection."""
+        self.ignored: set[int] = set()
+        self.received = 0
+        """Bytes read from the simulator's connections, and those left unread at a close."""
+        self.sockets: weakref.WeakSet[socket.socket] = weakref.WeakSet()
+        self.fds: set[int] = set()
+        self.forgiven = 0
+        self.warned = False
+
+    # ------------------------------------------------------------------ time
+
+    def ask(self, message: str) -> list[float]:
+        answer = self.written.ask(message)
+        self.now = max(self.now, answer[0])
+        return answer
+
+    def sleep(self, seconds: float) -> None:
+        """Sleep in simulated time, then let the program settle."""
+        before = self.now
+        with self.waiting():
+            value = self.ask(f"!sleep {seconds!r}")[0]
+        self.moved(value > before)
+
+    def read(self, library: bool) -> float:
+        """A clock read: the program's own counts toward the busy-wait rule (and may move
+        the clock); a library's never moves it."""
+        if library:
+            return self.ask("!peek")[0]
+        before = self.now
+        value = self.ask("!time")[0]
+        self.moved(value > before)
+        return value
+
+    def moved(self, moved: bool) -> None:
+        """The clock was seen to move (or not): with other threads, wake the reply pollers
+        and let the program settle before going on."""
+        if not moved or not self.others():
+            return
+        with self.cond:
+            self.moves += 1
+            self.cond.notify_all()
+        self.settle()
+
+    # ------------------------------------------------------------------ threads
+
+    def others(self) -> list[threading.Thread]:
+        """The program's other threads still running, that are waited for."""
+        me = threading.current_thread()
+        return [
+            t
+            for t in threading.enumerate()
+            if t is not me
+            and t.ident not in self.ignored
+            and not isinstance(t, threading._DummyThread)
+        ]
+
+    def waiting(self, target: Any = None) -> _Waiting:
+        """A context in which this thread waits with nothing due (``target``: the socket or
+        fd it reads, whose bytes, once there, end the wait)."""
+        return _Waiting(self, target)
+
+    def quiet(self, thread: threading.Thread, frames: dict[int, Any]) -> bool:
+        """Whether ``thread`` waits with nothing due to it: in a shimmed wait whose socket or
+        fd holds nothing, or blocked on a lock, queue or event of the program's."""
+        ident = thread.ident
+        if ident is None:
+            return True  # not started yet
+        if ident in self.waits:
+            target = self.waits[ident]
+            if target is None:
+                return True
+            fd = target if isinstance(target, int) else target.fileno()
+            return _inq(fd) == 0
+        frame = frames.get(ident)
+        if frame is None:
+            return True  # exited meanwhile
+        name = frame.f_code.co_filename.replace(os.sep, "/")
+        return bool(name.endswith(("/threading.py", "/queue.py", "/concurrent/futures/thread.py")))
+
+    def settle(self) -> None:
+        """Return once every reply byte the simulator sent has arrived, no two-port reply
+        waits for another thread that polls the reply port, and every other thread is in a
+        wait with nothing due (at most :data:`SETTLE_WAIT` wall seconds)."""
+        deadline = None
+        with self.waiting():
+            while True:
+                others = self.others()
+                if not others:
+                    return
+                _now, sent, owed = self.ask("!peek +")
+                polling = self.pollers & {t.ident for t in others}
+                if owed and polling:
+                    with self.cond:
+                        self.moves += 1  # a reply waits: the pollers go and get it
+                        self.cond.notify_all()
+                frames = sys._current_frames()
+                late = [t for t in others if not self.quiet(t, frames)]
+                arrived = self.arrived() + self.forgiven >= sent
+                if arrived and not late and not (owed and polling):
+                    return
+                now = _wall()
+                if deadline is None:
+                    deadline = now + SETTLE_WAIT
+                elif now > deadline:
+                    self.give_up(late, int(sent) - self.arrived() - self.forgiven)
+                    return
+                with self.cond:
+                    self.cond.wait(0.0005)
+
+    def give_up(self, late: list[threading.Thread], missing: int) -> None:
+        """Past :data:`SETTLE_WAIT`: go on without the threads that kept running (not waited
+        for again) and the bytes that never arrived; say so once."""
+        self.ignored.update(t.ident for t in late if t.ident is not None)
+        self.forgiven += max(missing, 0)
+        if not self.warned:
+            self.warned = True
+            names = ", ".join(t.name for t in late) or "none"
+            sys.stderr.write(
+                f"simmer: after a sleep the program did not settle within {SETTLE_WAIT:g} wall "
+                f"seconds (SETTLE_WAIT): threads still running: {names}; reply bytes not "
+                f"arrived: {max(missing, 0)}. The clock goes on without them, so this run may "
+                "not repeat exactly (docs/protocol.md, 'Threads').\n"
+            )
+
+    def empty_poll(self, seen: int) -> None:
+        """A reply connection came back empty: with other threads, wait until the clock has
+        moved since ``seen`` (or a reply waits), so a thread polling the reply port in a loop
+        waits for simulated time like a sleep; without them, return at once."""
+        if not self.others():
+            return
+        with self.waiting(), self.cond:
+            while self.moves == seen:
+                self.cond.wait(0.05)
+                if self.moves == seen and not self.others():
+                    return
+
+    # ------------------------------------------------------------------ bytes
+
+    def track(self, sock: socket.socket) -> None:
+        self.sockets.add(sock)
+
+    def got(self, size: int) -> None:
+        if size > 0:
+            with self.cond:
+                self.received += size
+
+    def closing(self, sock: socket.socket) -> None:
+        """A connection to the simulator closes: what it held unread arrived all the same."""
+        if sock in self.sockets:
+            self.got(_inq(sock.fileno()))
+            self.sockets.discard(sock)
+
+    def arrived(self) -> int:
+        """Bytes from the simulator that reached the program: read, or waiting to be read."""
+        total = self.received + self.written.clock.before
+        for sock in list(self.sockets):
+            total += _inq(sock.fileno())
+        for fd in list(self.fds):
+            total += _inq(fd)
+        return total
+
+    def poll(self, ready: Callable[[], bool], timeout: float | None) -> bool:
+        """A poll for the simulator's bytes (see the module doc): sync, wait for every byte
+        sent to arrive, and if nothing is ready wait ``timeout`` simulated seconds (None:
+        not at all, the caller blocks); a zero timeout counts as a clock read. Whether
+        anything is ready."""
+        before = self.now
+        message = "!time +" if timeout == 0 else "!peek +"
+        _now, sent, _owed = self.ask(message)
+        self.wait_arrived(int(sent))
+        if ready():
+            return True
+        if timeout is None:
+            return False
+        if timeout > 0:
+            self.sleep(min(float(timeout), MAX_SLEEP))
+            _now, sent, _owed = self.ask("!peek +")
+            self.wait_arrived(int(sent))
+            return ready()
+        self.moved(self.now > before)
+        return False
+
+    def wait_arrived(self, sent: int) -> None:
+        """Wait (wall time, briefly) until ``sent`` bytes from the simulator have arrived: a
+        pseudo-terminal delivers what its master writes a little later."""
+        deadline = None
+        while self.arrived() + self.forgiven < sent:
+            now = _wall()
+            if deadline is None:
+                deadline = now + SETTLE_WAIT
+            elif now > deadline:
+                self.give_up([], sent - self.arrived() - self.forgiven)
+                return
+            _REAL_SLEEP(0.0001)
+
+
+def _wall() -> float:
+    """The wall clock (the shim's own limits)."""
+    return _REAL_MONOTONIC()
+
+
+_REAL_MONOTONIC = time.monotonic
+
+
+class _Waiting:
+    """While inside: this thread waits with nothing due (see :meth:`_Program.waiting`)."""
+
+    def __init__(self, program: _Program, target: Any) -> None:
+        self.program = program
+        self.target = target
+        self.ident = threading.get_ident()
+        self.outer = False
+
+    def __enter__(self) -> None:
+        waits = self.program.waits
+        self.outer = self.ident not in waits
+        if self.outer:
+            waits[self.ident] = self.target
+            with self.program.cond:
+                self.program.cond.notify_all()
+
+    def __exit__(self, *exc: object) -> None:
+        if self.outer:
+            self.program.waits.pop(self.ident, None)
 
 
 def _ports(name: str) -> set[int]:
@@ -142,7 +451,14 @@ def _install(address: str) -> None:
     real_connect_ex = socket.socket.connect_ex
     clock = _Clock(host, int(port), real_connect)
     written = _Written(clock)
+    program = _Program(written)
     epoch = float(os.environ.get("SIMMER_EPOCH", "0"))
+    library = _library_folders()
+
+    def from_library(frame: Any) -> bool:
+        """Whether the clock read was made by a library's code (see the module doc)."""
+        name = frame.f_code.co_filename
+        return bool(name.startswith((*library, "<frozen")))
 
     def sleep(seconds: float) -> None:
         """Advance the simulation by ``seconds`` (lockstep) and return when it has."""
@@ -156,20 +472,29 @@ def _install(address: str) -> None:
                 f"sleep length {seconds:g} s is too large: under SimMeR's lockstep clock a sleep "
                 f"is at most {MAX_SLEEP:g} simulated seconds (MAX_SLEEP, as a command's value)"
             )
-        written.ask(f"!sleep {seconds!r}")
+        program.sleep(seconds)
 
-    def now() -> float:
-        return written.ask("!time")
+    def monotonic() -> float:
+        return program.read(from_library(sys._getframe(1)))
+
+    def wall() -> float:
+        return epoch + program.read(from_library(sys._getframe(1)))
+
+    def monotonic_ns() -> int:
+        return round(program.read(from_library(sys._getframe(1))) * 1e9)
+
+    def wall_ns() -> int:
+        return round((epoch + program.read(from_library(sys._getframe(1)))) * 1e9)
 
     # partial objects, like the built-ins they replace, do not bind as methods when a library
     # keeps one as a class attribute (pyserial's ``TIME = time.monotonic``)
     time.sleep = functools.partial(sleep)
-    time.monotonic = functools.partial(now)
-    time.perf_counter = functools.partial(now)
-    time.time = functools.partial(lambda: epoch + now())
-    time.monotonic_ns = functools.partial(lambda: round(now() * 1e9))
-    time.perf_counter_ns = functools.partial(lambda: round(now() * 1e9))
-    time.time_ns = functools.partial(lambda: round((epoch + now()) * 1e9))
+    time.monotonic = functools.partial(monotonic)
+    time.perf_counter = functools.partial(monotonic)
+    time.time = functools.partial(wall)
+    time.monotonic_ns = functools.partial(monotonic_ns)
+    time.perf_counter_ns = functools.partial(monotonic_ns)
+    time.time_ns = functools.partial(wall_ns)
 
     ports: dict[int, int] = {}
     for pair in filter(None, os.environ.get("SIMMER_PORT_MAP", "").split(",")):
@@ -180,6 +505,10 @@ def _install(address: str) -> None:
     reply_ports = _ports("SIMMER_REPLY_PORTS")
     two_port_rx = _ports("SIMMER_PORT_RX")
     roles: weakref.WeakKeyDictionary[socket.socket, str] = weakref.WeakKeyDictionary()
+    seen: weakref.WeakKeyDictionary[socket.socket, int] = weakref.WeakKeyDictionary()
+    """Each reply connection: the clock's moves when it opened (an empty one waits for more)."""
+    answered: weakref.WeakSet[socket.socket] = weakref.WeakSet()
+    """Reply connections that brought something."""
 
     def redirect(address: Any) -> tuple[Any, str | None]:
         """Where to connect instead, and the connection's role (None: not the simulator)."""
@@ -189,29 +518,34 @@ def _install(address: str) -> None:
         role = "message" if port in message_ports else "reply" if port in reply_ports else None
         return (address[0], port, *address[2:]), role
 
-    def connect(self: socket.socket, address: Any) -> None:
-        target, role = redirect(address)
+    def opening(sock: socket.socket, target: Any, role: str | None) -> None:
+        """Before a connection to the simulator opens: know its role (a non-blocking connect
+        raises before it is done)."""
         if role == "reply":
             written.sync_before_reply()
-        real_connect(self, target)
+            program.pollers.add(threading.get_ident())
+            seen[sock] = program.moves
         if role is not None:
-            roles[self] = role
+            roles[sock] = role
+            program.track(sock)
         if role is not None and target[1] in two_port_rx:
-            written.two_port[self] = 0
+            written.two_port[sock] = 0
+
+    def connect(self: socket.socket, address: Any) -> None:
+        target, role = redirect(address)
+        opening(self, target, role)
+        real_connect(self, target)
 
     def connect_ex(self: socket.socket, address: Any) -> int:
         target, role = redirect(address)
-        if role == "reply":
-            written.sync_before_reply()
-        result = int(real_connect_ex(self, target))
-        if role is not None:
-            roles[self] = role
-        if role is not None and target[1] in two_port_rx:
-            written.two_port[self] = 0
-        return result
+        opening(self, target, role)
+        return int(real_connect_ex(self, target))
 
     real_send = socket.socket.send
     real_sendall = socket.socket.sendall
+    real_recv = socket.socket.recv
+    real_recv_into = socket.socket.recv_into
+    real_close = socket.socket.close
 
     def send(self: socket.socket, data: Any, *args: Any) -> int:
         if roles.get(self) != "message":
@@ -229,23 +563,124 @@ def _install(address: str) -> None:
         real_sendall(self, data, *args)
         written.wrote(self, memoryview(data).nbytes)
 
+    def readable(sock: socket.socket) -> Callable[[], bool]:
+        return lambda: bool(_REAL_SELECT([sock], [], [], 0)[0])
+
+    def receiving(
+        self: socket.socket, receive: Callable[[], Any], size: Callable[[Any], int]
+    ) -> Any:
+        """A read on a connection to the simulator: counted; a timeout is simulated time, a
+        non-blocking read a poll (module doc); an empty reply connection a poll too."""
+        role = roles.get(self)
+        if role is None:
+            return receive()
+        timeout = self.gettimeout()
+        if role == "reply" or _inq(self.fileno()) > 0:  # a reply connection is served at once
+            data = receive()
+        elif timeout is None:
+            with program.waiting(self):
+                data = receive()
+        else:
+            if not program.poll(readable(self), timeout) and timeout > 0:
+                raise socket.timeout("timed out")  # noqa: UP041 (Python 3.8's own)
+            data = receive()
+        got = size(data)
+        program.got(got)
+        if role == "reply" and got:
+            answered.add(self)
+        elif role == "reply" and self not in answered:  # closed with nothing: a poll
+            program.empty_poll(seen.get(self, program.moves))
+        return data
+
+    def recv(self: socket.socket, bufsize: int, *args: Any) -> bytes:
+        return receiving(self, lambda: real_recv(self, bufsize, *args), len)  # type: ignore[no-any-return]
+
+    def recv_into(self: socket.socket, buffer: Any, *args: Any) -> int:
+        return receiving(self, lambda: real_recv_into(self, buffer, *args), int)  # type: ignore[no-any-return]
+
+    def close(self: socket.socket) -> None:
+        program.closing(self)
+        real_close(self)
+
     socket.socket.connect = connect  # type: ignore[method-assign,assignment]
     socket.socket.connect_ex = connect_ex  # type: ignore[method-assign,assignment]
     socket.socket.send = send  # type: ignore[method-assign,assignment]
     socket.socket.sendall = sendall  # type: ignore[method-assign,assignment]
+    socket.socket.recv = recv  # type: ignore[method-assign,assignment]
+    socket.socket.recv_into = recv_into  # type: ignore[method-assign,assignment]
+    socket.socket.close = close  # type: ignore[method-assign,assignment]
+    _patch_select(
+        program,
+        lambda fd: fd in program.fds or any(s.fileno() == fd for s in list(program.sockets)),
+    )
     if os.environ.get("SIMMER_SERIAL"):
-        _count_serial(os.path.realpath(os.environ["SIMMER_SERIAL"]), written)
+        _count_serial(os.path.realpath(os.environ["SIMMER_SERIAL"]), written, program)
 
 
-def _count_serial(device: str, written: _Written) -> None:
+def _fd(item: Any) -> int:
+    return item if isinstance(item, int) else int(item.fileno())
+
+
+def _patch_select(program: _Program, ours: Callable[[int], bool]) -> None:
+    """``select.select`` and the ``selectors``, on a connection to the simulator, wait in
+    simulated time (module doc); on anything else (a child process's pipes, the standard
+    input) they wait as Python would."""
+
+    def select_(
+        rlist: Iterable[Any], wlist: Iterable[Any], xlist: Iterable[Any], timeout: Any = None
+    ) -> Any:
+        rlist, wlist, xlist = list(rlist), list(wlist), list(xlist)
+        if not any(ours(_fd(item)) for item in rlist + wlist + xlist):
+            return _REAL_SELECT(rlist, wlist, xlist, timeout)  # a wait on something else
+
+        def ready() -> bool:
+            return any(_REAL_SELECT(rlist, wlist, xlist, 0))
+
+        if program.poll(ready, None if timeout is None else max(float(timeout), 0.0)):
+            return _REAL_SELECT(rlist, wlist, xlist, 0)
+        if timeout is None:
+            with program.waiting():
+                return _REAL_SELECT(rlist, wlist, xlist)
+        return _REAL_SELECT(rlist, wlist, xlist, 0)
+
+    select.select = select_
+    for name in (
+        "SelectSelector",
+        "PollSelector",
+        "EpollSelector",
+        "DevpollSelector",
+        "KqueueSelector",
+    ):
+        cls = getattr(selectors, name, None)
+        if cls is not None:
+            _patch_selector(cls, program, ours)
+
+
+def _patch_selector(cls: Any, program: _Program, ours: Callable[[int], bool]) -> None:
+    real = cls.select
+
+    def select_(self: Any, timeout: float | None = None) -> Any:
+        if not any(ours(key.fd) for key in self.get_map().values()):
+            return real(self, timeout)  # a wait on something else (a child's pipes)
+        wait = None if timeout is None else max(float(timeout), 0.0)
+        if program.poll(lambda: bool(real(self, 0)), wait) or timeout is not None:
+            return real(self, 0)
+        with program.waiting():
+            return real(self, None)
+
+    cls.select = select_
+
+
+def _count_serial(device: str, written: _Written, program: _Program) -> None:
     """Count what the program writes to the virtual serial port ``device`` (pyserial opens it
-    with ``os.open`` and writes with ``os.write``)."""
-    real_open, real_write, real_close = os.open, os.write, os.close
-    serial: set[int] = set()
+    with ``os.open`` and writes with ``os.write``) and reads from it, and make ``in_waiting``
+    (``ioctl TIOCINQ``) a poll."""
+    real_open, real_write, real_read, real_close = os.open, os.write, os.read, os.close
+    serial = program.fds
 
     def open_(path: Any, flags: int, *args: Any, **kwargs: Any) -> int:
         fd = real_open(path, flags, *args, **kwargs)
-        if isinstance(path, str | bytes | os.PathLike) and os.path.realpath(path) == device:
+        if isinstance(path, (str, bytes, os.PathLike)) and os.path.realpath(path) == device:
             serial.add(fd)
         return fd
 
@@ -257,13 +692,29 @@ def _count_serial(device: str, written: _Written) -> None:
         written.wrote(fd, size)
         return size
 
+    def read(fd: int, size: int) -> bytes:
+        data = real_read(fd, size)
+        if fd in serial:
+            program.got(len(data))
+        return data
+
     def close(fd: int) -> None:
-        serial.discard(fd)
+        if fd in serial:
+            program.got(_inq(fd))
+            serial.discard(fd)
         real_close(fd)
+
+    def ioctl(fd: Any, request: int, *args: Any) -> Any:
+        if request == _FIONREAD and _fd(fd) in serial:
+            program.poll(lambda: _inq(_fd(fd)) > 0, 0)
+        return _REAL_IOCTL(fd, request, *args)
 
     os.open = open_
     os.write = write
+    os.read = read
     os.close = close
+    if fcntl is not None:
+        fcntl.ioctl = ioctl
 
 
 def _chain() -> None:
