@@ -65,10 +65,10 @@ def compiled_kernels() -> None:
     from simmer import Simulation
     from simmer.runner import LocalLink
 
-    with_infrared = Simulation.from_config(
-        Path(__file__).parents[1] / "examples" / "simmer_default.toml"
-    )
-    with_infrared.expected([[12.0, 12.0, 0.0]])  # the expected readings' kernels (~1.4 CPU s)
+    with_infrared = Path(__file__).parents[1] / "examples" / "simmer_default.toml"
+    if with_infrared.is_file():  # not when a test runs a copy of this file elsewhere
+        sim = Simulation.from_config(with_infrared)
+        sim.expected([[12.0, 12.0, 0.0]])  # the expected readings' kernels (~1.4 CPU s)
     link = LocalLink(Simulation.from_config())
     link.exchange("u0,u1,u2,u3")
     link.exchange("w0-1")
