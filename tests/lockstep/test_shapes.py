@@ -123,6 +123,9 @@ def test_a_library_that_reads_the_clock_before_the_first_message(
     first = next(json.loads(line) for line in events.splitlines() if '"command"' in line)
     assert (first["step"], first["message"]) == (0, "u0,u1")
     assert '"peek"' not in events  # a library's reads are not recorded
+    # subprocess's wait for fc-list sleeps on the wall clock: only the program's sleeps count
+    sleeps = [json.loads(e)["value"] for e in events.splitlines() if '"sleep"' in e]
+    assert sleeps == [0.05, 0.05, 1.0] * 2
     assert printed.splitlines()[-1] == "done"
 
 

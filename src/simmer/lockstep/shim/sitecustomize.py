@@ -25,6 +25,10 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
 * Clock reads made by the standard library's or an installed package's code (the caller's
   file says which) never move the clock and are not counted as reads (``!peek``): how often
   a library reads the clock is its business, not the program's.
+* The standard library's waits for another process (``subprocess``, ``multiprocessing``:
+  ``Popen.wait`` with a timeout sleeps and reads the clock in a loop) keep the wall clock
+  for their sleeps and reads: that process runs in real time, and how many turns its wait
+  took must not show in the simulation (``pygame.font.SysFont`` waits so for ``fc-list``).
 * Polls on the simulator's connections wait in simulated time: ``select``/``selectors``
   with a timeout, a socket with a timeout or non-blocking, a serial port's ``in_waiting``.
   Each first makes sure that everything written was taken and that every reply byte the
@@ -445,6 +449,12 @@ def _ports(name: str) -> set[int]:
     return {int(port) for port in os.environ.get(name, "").split(",") if port.isdigit()}
 
 
+def _process_waits() -> tuple[str, ...]:
+    """The standard library's files that wait for other processes (see the module doc)."""
+    stdlib = os.path.abspath(sysconfig.get_paths()["stdlib"])
+    return (os.path.join(stdlib, "subprocess.py"), os.path.join(stdlib, "multiprocessing") + os.sep)
+
+
 def _install(address: str) -> None:
     host, _, port = address.rpartition(":")
     real_connect = socket.socket.connect
@@ -454,14 +464,24 @@ def _install(address: str) -> None:
     program = _Program(written)
     epoch = float(os.environ.get("SIMMER_EPOCH", "0"))
     library = _library_folders()
+    process_waits = _process_waits()
+    real_time, real_time_ns = time.time, time.time_ns
+    real_monotonic_ns = time.monotonic_ns
 
     def from_library(frame: Any) -> bool:
         """Whether the clock read was made by a library's code (see the module doc)."""
         name = frame.f_code.co_filename
         return bool(name.startswith((*library, "<frozen")))
 
+    def waits_on_a_process(frame: Any) -> bool:
+        """Whether the caller is the standard library waiting for another process."""
+        return bool(frame.f_code.co_filename.startswith(process_waits))
+
     def sleep(seconds: float) -> None:
         """Advance the simulation by ``seconds`` (lockstep) and return when it has."""
+        if waits_on_a_process(sys._getframe(1)):
+            _REAL_SLEEP(seconds)
+            return
         seconds = float(seconds)
         if math.isnan(seconds):
             raise ValueError("Invalid value NaN (not a number)")  # as Python's own sleep says
@@ -475,16 +495,28 @@ def _install(address: str) -> None:
         program.sleep(seconds)
 
     def monotonic() -> float:
-        return program.read(from_library(sys._getframe(1)))
+        caller = sys._getframe(1)
+        if waits_on_a_process(caller):
+            return _REAL_MONOTONIC()
+        return program.read(from_library(caller))
 
     def wall() -> float:
-        return epoch + program.read(from_library(sys._getframe(1)))
+        caller = sys._getframe(1)
+        if waits_on_a_process(caller):
+            return real_time()
+        return epoch + program.read(from_library(caller))
 
     def monotonic_ns() -> int:
-        return round(program.read(from_library(sys._getframe(1))) * 1e9)
+        caller = sys._getframe(1)
+        if waits_on_a_process(caller):
+            return real_monotonic_ns()
+        return round(program.read(from_library(caller)) * 1e9)
 
     def wall_ns() -> int:
-        return round((epoch + program.read(from_library(sys._getframe(1)))) * 1e9)
+        caller = sys._getframe(1)
+        if waits_on_a_process(caller):
+            return real_time_ns()
+        return round((epoch + program.read(from_library(caller))) * 1e9)
 
     # partial objects, like the built-ins they replace, do not bind as methods when a library
     # keeps one as a class attribute (pyserial's ``TIME = time.monotonic``)
