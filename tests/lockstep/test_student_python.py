@@ -18,7 +18,15 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
-from simmer.lockstep import GATE, OLDEST_PYTHON, SHIM, program_environment, split_command
+from simmer.lockstep import (
+    GATE,
+    OLDEST_PYTHON,
+    SHIM,
+    Program,
+    ProgramNotFound,
+    program_environment,
+    split_command,
+)
 
 from helpers import REPO, run_simmer
 
@@ -161,6 +169,8 @@ def test_python_is_the_first_on_the_runs_path(tmp_path: Path) -> None:
     assert split_command(f"{sys.executable} robot.py", path)[0] == sys.executable
     assert split_command("./robot.py", path)[0] == "./robot.py"  # a path: as written
     assert split_command("no-such-program", path)[0] == "no-such-program"
+    with pytest.raises(ProgramNotFound, match="no 'no-such-program' on this terminal's PATH"):
+        Program.start("no-such-program x.py", {"PATH": path})
 
 
 ONLY_HERE = """\

@@ -165,6 +165,17 @@ NOT_PYTHON = (
 """What ``simmer run --program`` says for a program :func:`runs_python` does not recognise."""
 
 
+class ProgramNotFound(FileNotFoundError):
+    """The first word of ``--program`` names no file on the run's ``PATH``."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(
+            f"cannot start the program: no {name!r} on this terminal's PATH. Activate the "
+            "environment it runs in (SimMeR's: the README's Quick start), or give its full path "
+            "in --program"
+        )
+
+
 @dataclass
 class Program:
     """A control program started for a run, in a session of its own so that the whole process
@@ -190,8 +201,11 @@ class Program:
         changing its own."""
         if answer is not None and len(answer) > MAX_ANSWER:
             raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
+        args = split_command(command, env.get("PATH"))
+        if os.path.basename(args[0]) == args[0]:  # a name on_path did not find
+            raise ProgramNotFound(args[0])
         process = subprocess.Popen(
-            split_command(command, env.get("PATH")),
+            args,
             env=dict(env),
             start_new_session=True,
             cwd=folder,
