@@ -18,12 +18,12 @@ import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
+from simmer.errors import ProgramNotFound
 from simmer.lockstep import (
     GATE,
     OLDEST_PYTHON,
     SHIM,
     Program,
-    ProgramNotFound,
     program_environment,
     split_command,
 )

@@ -563,10 +563,6 @@ class _RunLog:
 def _serve_failure(exc: OSError, host: str) -> str:
     """Why the simulator could not listen, pointing at the fix (only a port in use can mean
     another simmer)."""
-    from simmer.lockstep import ProgramNotFound
-
-    if isinstance(exc, ProgramNotFound):
-        return str(exc)
     if exc.errno == errno.EADDRINUSE:
         return (
             f"cannot serve: {exc}. Another simmer run (or another program) is using this port: "

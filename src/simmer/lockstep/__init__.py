@@ -36,6 +36,7 @@ from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 
+from simmer.errors import ProgramNotFound
 from simmer.lockstep.gate.sitecustomize import OLDEST_PYTHON as OLDEST_PYTHON
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 
@@ -165,17 +166,6 @@ NOT_PYTHON = (
 """What ``simmer run --program`` says for a program :func:`runs_python` does not recognise."""
 
 
-class ProgramNotFound(FileNotFoundError):
-    """The first word of ``--program`` names no file on the run's ``PATH``."""
-
-    def __init__(self, name: str) -> None:
-        super().__init__(
-            f"cannot start the program: no {name!r} on this terminal's PATH. Activate the "
-            "environment it runs in (SimMeR's: the README's Quick start), or give its full path "
-            "in --program"
-        )
-
-
 @dataclass
 class Program:
     """A control program started for a run, in a session of its own so that the whole process
@@ -193,17 +183,22 @@ class Program:
         folder: Path | None = None,
         output: int | None = None,
     ) -> Program:
-        """Start ``command`` (raises ``OSError`` if it cannot be started). With ``answer``,
-        its standard input is that text and a newline, then its end (``--answer``: what a
-        person would type at the program's prompt). It works in ``folder`` and writes its
-        standard output and error to the file descriptor ``output`` (None: this process's
-        folder and output), so that a sweep worker gives each run's program its own without
-        changing its own."""
+        """Start ``command`` (raises ``OSError`` if it cannot be started:
+        :class:`~simmer.errors.ProgramNotFound` if its first word is on no folder of ``PATH``).
+        With ``answer``, its standard input is that text and a newline, then its end
+        (``--answer``: what a person would type at the program's prompt). It works in
+        ``folder`` and writes its standard output and error to the file descriptor ``output``
+        (None: this process's folder and output), so that a sweep worker gives each run's
+        program its own without changing its own."""
         if answer is not None and len(answer) > MAX_ANSWER:
             raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
         args = split_command(command, env.get("PATH"))
         if os.path.basename(args[0]) == args[0]:  # a name on_path did not find
-            raise ProgramNotFound(args[0])
+            raise ProgramNotFound(
+                f"cannot start the program: no {args[0]!r} on this terminal's PATH. Activate "
+                "the environment it runs in (SimMeR's: the README's Quick start), or give its "
+                "full path in --program"
+            )
         process = subprocess.Popen(
             args,
             env=dict(env),
