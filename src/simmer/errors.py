@@ -17,6 +17,7 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     │   └── UntrustedRun       its configuration names code (plug-ins, device files)
     ├── PlotError              a run folder cannot be plotted
     ├── UnsafeOutput + OSError a file's name holds a link or no regular file: not written
+    ├── ProgramNotFound + FileNotFoundError  ``--program``'s first word is not on PATH
     ├── BusClosed              the simulation loop has stopped
     ├── SweepError + ValueError     a sweep file SimMeR cannot run
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
@@ -56,6 +57,7 @@ __all__ = [
     "FolderExists",
     "LimitReached",
     "PlotError",
+    "ProgramNotFound",
     "ReplayError",
     "ReplyTimeout",
     "ScenarioError",
@@ -156,6 +158,11 @@ class UnsafeOutput(SimmerError, OSError):
     """A file SimMeR would write (into a run folder, most often) is at a name that holds a
     symbolic link, a folder, a pipe or a device, or the folder is a link: nothing is written
     (an ``OSError``, so that "cannot write" handlers say it)."""
+
+
+class ProgramNotFound(SimmerError, FileNotFoundError):
+    """The first word of ``--program`` (``python``) names no file on the run's ``PATH``: the
+    program runs in the student's environment, and this terminal does not have it."""
 
 
 class BusClosed(SimmerError):

@@ -23,6 +23,7 @@ from simmer.lockstep import (
     Program,
     program_environment,
     runs_python,
+    which_program,
 )
 from simmer.lockstep.output import ENCODING, ProgramOutput
 from simmer.options import RunOptions
@@ -232,7 +233,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                     )
                     said(f"running headless, {pace}; Ctrl-C to stop")
                 if options.program is not None:
-                    said(f"starting the program: {options.program}")
+                    said(f"starting the program: {which_program(options.program)}")
                     said.hold()  # the program's printout only, until it is over
                     before = descendants()
                     started = _start_program(

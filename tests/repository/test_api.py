@@ -84,6 +84,7 @@ EXPORTED = {
         "FolderExists",
         "LimitReached",
         "PlotError",
+        "ProgramNotFound",
         "ReplayError",
         "ReplyTimeout",
         "ScenarioError",

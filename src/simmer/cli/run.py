@@ -148,7 +148,11 @@ ProgramFlag = Annotated[
     str | None,
     typer.Option(
         help='Start this control program (e.g. "python my_robot.py") on free ports and '
-        "end the run when it exits; its clock follows simulated time (lockstep).",
+        "end the run when it exits; its clock follows simulated time (lockstep). It runs as "
+        "written, in your environment: python is the first on your PATH (Python 3.8 or "
+        "later), with your packages. SimMeR adds its lockstep shim first on PYTHONPATH, "
+        "SIMMER_* variables (this run's ports) and PYTHONUNBUFFERED=1. A process the "
+        "program starts may not sleep or talk to the simulator.",
         show_default=False,
         metavar="COMMAND",
     ),

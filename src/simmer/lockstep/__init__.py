@@ -1,12 +1,17 @@
 """Lockstep runs: a control program and the simulation share one simulated clock.
 
 ``simmer run CONFIG --program "python my_robot.py"`` starts the program itself (see
-:class:`Program`) with this package's ``shim`` folder first on ``PYTHONPATH``: its
-``sitecustomize`` makes the program's ``time.sleep`` and clock reads follow simulated time and
-sends its connections to SimMeR's standard ports to this run's free ports. The simulator then
-advances only when the program asks (a sleep, or a clock read after many with nothing between)
-and by a fixed link delay per message, so the same configuration, seed and program give the
-same run on any machine and at any speed.
+:class:`Program`), as written: ``python`` is the one first on the student's ``PATH``, with
+their environment's packages, not SimMeR's own. This package's ``gate`` and ``shim`` folders
+go first on its ``PYTHONPATH``: the gate stops a Python older than ``OLDEST_PYTHON`` with
+one plain line, and the shim's ``sitecustomize`` (standard library only, Python 3.8 and later)
+makes the program's ``time.sleep`` and clock reads follow simulated time and sends its
+connections to SimMeR's standard ports to this run's free ports. A process the program starts
+is not on the clock: the shim refuses its sleeps and its connections to the simulator.
+
+The simulator then advances only when the program asks (a sleep, or a clock read after many
+with nothing between) and by a fixed link delay per message, so the same configuration, seed
+and program give the same run on any machine and at any speed.
 
 The clock messages, on the persistent protocol (one line each, answered with a one-value frame
 holding the simulated time after it, as float64):
@@ -22,19 +27,25 @@ from __future__ import annotations
 
 import os
 import shlex
+import shutil
 import signal
 import subprocess
-import sys
 import time
 from collections.abc import Mapping, Sequence
 from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 
+from simmer.errors import ProgramNotFound
+from simmer.lockstep.gate.sitecustomize import OLDEST_PYTHON as OLDEST_PYTHON
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 
 SHIM = Path(__file__).resolve().parent / "shim"
 """The folder whose ``sitecustomize.py`` puts a Python program on the simulated clock."""
+GATE = Path(__file__).resolve().parent / "gate"
+"""The folder before :data:`SHIM` on the path, whose ``sitecustomize.py`` (parsed by every
+Python) stops a Python older than ``OLDEST_PYTHON`` (3.8, defined there) with one line, else
+hands over to the shim."""
 
 FREE_TIME_READS = 16
 """Clock reads in a row that cost nothing; the next one advances one step (see module doc).
@@ -60,7 +71,9 @@ def program_environment(
     base: Mapping[str, str] | None = None,
     configured: Mapping[str, int] | None = None,
 ) -> dict[str, str]:
-    """The environment a lockstep program runs in: the shim on its path, this run's ports.
+    """The environment a lockstep program runs in: the gate and the shim first on its
+    ``PYTHONPATH``, this run's ports, ``PYTHONUNBUFFERED``; everything else (``PATH``, a
+    virtual environment) as ``base`` has it (default: this process's environment).
 
     ``ports`` maps ``port_rx``, ``port_tx`` and ``stream`` to the ports this run serves on;
     connections to SimMeR's standard ports, and to the ports the configuration names
@@ -71,7 +84,7 @@ def program_environment(
     """
     env = dict(os.environ if base is None else base)
     path = env.get("PYTHONPATH")
-    env["PYTHONPATH"] = str(SHIM) + (os.pathsep + path if path else "")
+    env["PYTHONPATH"] = os.pathsep.join([str(GATE), str(SHIM), *([path] if path else [])])
     env["SIMMER_LOCKSTEP"] = f"{host}:{ports['stream']}"
     env["SIMMER_EPOCH"] = repr(time.time())
     redirected = {STANDARD_PORTS[name]: port for name, port in ports.items()}
@@ -88,16 +101,46 @@ def program_environment(
     return env
 
 
-def split_command(command: str | Sequence[str]) -> list[str]:
-    """A program's command line as arguments; ``python`` means this Python (the venv's)."""
+def split_command(command: str | Sequence[str], path: str | None = None) -> list[str]:
+    """A program's command line as arguments, to run as written: a first word without a
+    folder (``python``, ``py``, ``node``) becomes the file a terminal would run, the first of
+    that name on ``path`` (the run's ``PATH``; None: this process's), left as it is if there is
+    none. So ``python`` is the student's, with their environment's packages, never SimMeR's
+    own (which Windows would otherwise look in first, as the starting program's folder)."""
+    args = _arguments(command)
+    found = on_path(args[0], path)
+    if found is not None:
+        args[0] = found
+    return args
+
+
+def _arguments(command: str | Sequence[str]) -> list[str]:
     args = (
         shlex.split(command, posix=os.name != "nt") if isinstance(command, str) else list(command)
     )
     if not args:
         raise ValueError("the program's command line is empty")
-    if args[0] in ("python", "python3"):
-        args[0] = sys.executable
     return args
+
+
+def on_path(name: str, path: str | None = None) -> str | None:
+    """The file that runs as ``name`` when ``name`` has no folder (the first of that name on
+    ``path``; None: this process's ``PATH``), else None (a path, or a name not found)."""
+    if not name or os.path.basename(name) != name:
+        return None
+    return shutil.which(name, path=path)
+
+
+def which_program(command: str | Sequence[str]) -> str:
+    """The command as given, and the file its first word runs if that was found on ``PATH``
+    (``python my_robot.py (python: /home/me/.venv/bin/python)``): which Python runs it."""
+    shown = command if isinstance(command, str) else shlex.join(command)
+    try:
+        name = _arguments(command)[0]
+    except ValueError:  # not a command line Program.start can run; it says so
+        return shown
+    found = on_path(name)
+    return shown if found is None else f"{shown} ({name}: {found})"
 
 
 def runs_python(command: str | Sequence[str]) -> bool:
@@ -140,16 +183,24 @@ class Program:
         folder: Path | None = None,
         output: int | None = None,
     ) -> Program:
-        """Start ``command`` (raises ``OSError`` if it cannot be started). With ``answer``,
-        its standard input is that text and a newline, then its end (``--answer``: what a
-        person would type at the program's prompt). It works in ``folder`` and writes its
-        standard output and error to the file descriptor ``output`` (None: this process's
-        folder and output), so that a sweep worker gives each run's program its own without
-        changing its own."""
+        """Start ``command`` (raises ``OSError`` if it cannot be started:
+        :class:`~simmer.errors.ProgramNotFound` if its first word is on no folder of ``PATH``).
+        With ``answer``, its standard input is that text and a newline, then its end
+        (``--answer``: what a person would type at the program's prompt). It works in
+        ``folder`` and writes its standard output and error to the file descriptor ``output``
+        (None: this process's folder and output), so that a sweep worker gives each run's
+        program its own without changing its own."""
         if answer is not None and len(answer) > MAX_ANSWER:
             raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
+        args = split_command(command, env.get("PATH"))
+        if os.path.basename(args[0]) == args[0]:  # a name on_path did not find
+            raise ProgramNotFound(
+                f"cannot start the program: no {args[0]!r} on this terminal's PATH. Activate "
+                "the environment it runs in (SimMeR's: the README's Quick start), or give its "
+                "full path in --program"
+            )
         process = subprocess.Popen(
-            split_command(command),
+            args,
             env=dict(env),
             start_new_session=True,
             cwd=folder,

@@ -749,6 +749,121 @@ def _count_serial(device: str, written: _Written, program: _Program) -> None:
         fcntl.ioctl = ioctl
 
 
+PROGRAM_PID = "SIMMER_PROGRAM_PID"
+"""The environment variable holding the program's process id: set by the first process that
+loads this shim (the program; a command that replaces itself keeps its id), inherited by every
+process it starts, which is therefore a child."""
+CHILD_REFUSED = (
+    "a process the program started cannot {what} under simmer run --program: only the "
+    "program's own process is on the simulated clock, so do this in the program's process "
+    "(in a thread if it must run alongside)"
+)
+"""What a child process is told when it uses the simulator (a RuntimeError)."""
+_CLOCK_READS = ("time", "monotonic", "perf_counter", "time_ns", "monotonic_ns", "perf_counter_ns")
+_MACHINE_CLOCK = {name: getattr(time, name) for name in _CLOCK_READS}
+"""The clock reads as Python has them (this runs before ``_install`` replaces them)."""
+
+
+def _refuse_in_children() -> None:
+    """In a process the program started (``multiprocessing``, ``subprocess``, ``os.fork``),
+    refuse what would need the simulated clock, with :data:`CHILD_REFUSED`: a clock message (a
+    sleep), a connection to the simulator, a write on one it inherited. The clock has one
+    program to wait for, and a child's sleeps and messages would land on it as the machine
+    schedules them. Its clock reads are the machine's; anything else it does is its own."""
+    child = [os.environ.setdefault(PROGRAM_PID, str(os.getpid())) != str(os.getpid())]
+    if hasattr(os, "register_at_fork"):  # a fork copies the program's memory, shim and all
+        os.register_at_fork(after_in_child=lambda: child.__setitem__(0, True))
+    simulator = _ports("SIMMER_MESSAGE_PORTS") | _ports("SIMMER_REPLY_PORTS")
+    for pair in os.environ.get("SIMMER_PORT_MAP", "").split(","):
+        simulator |= {int(port) for port in pair.split("=") if port.isdigit()}
+    lockstep = os.environ.get("SIMMER_LOCKSTEP", "").rpartition(":")[2]
+    simulator |= {int(lockstep)} if lockstep.isdigit() else set()
+    local = _LOCAL | {os.environ.get("SIMMER_HOST", "127.0.0.1")}
+
+    def refuse(what: str) -> None:
+        if child[0]:
+            raise RuntimeError(CHILD_REFUSED.format(what=what))
+
+    def to_simulator(address: Any) -> bool:
+        return isinstance(address, tuple) and address[0] in local and address[1] in simulator
+
+    def connected_to_simulator(sock: socket.socket) -> bool:
+        try:
+            return to_simulator(sock.getpeername())
+        except OSError:  # not connected
+            return False
+
+    ask = _Clock.ask
+
+    def clock_message(self: _Clock, message: str) -> float:
+        refuse("sleep or wait on the simulated clock")
+        return ask(self, message)
+
+    _Clock.ask = clock_message  # type: ignore[method-assign]
+
+    def clock_read(name: str) -> Any:
+        simulated, machine = getattr(time, name), _MACHINE_CLOCK[name]
+        return functools.partial(lambda: machine() if child[0] else simulated())
+
+    for name in _CLOCK_READS:
+        setattr(time, name, clock_read(name))
+
+    def guard_connect(real: Any) -> Any:
+        def connect(self: socket.socket, address: Any) -> Any:
+            if child[0] and to_simulator(address):
+                refuse("connect to the simulator")
+            return real(self, address)
+
+        return connect
+
+    def guard_send(real: Any) -> Any:
+        def send(self: socket.socket, data: Any, *args: Any) -> Any:
+            if child[0] and connected_to_simulator(self):
+                refuse("write to the simulator")
+            return real(self, data, *args)
+
+        return send
+
+    for name in ("connect", "connect_ex"):
+        setattr(socket.socket, name, guard_connect(getattr(socket.socket, name)))
+    for name in ("send", "sendall"):
+        setattr(socket.socket, name, guard_send(getattr(socket.socket, name)))
+    if os.environ.get("SIMMER_SERIAL"):
+        _refuse_serial_in_children(os.environ["SIMMER_SERIAL"], child, refuse)
+
+
+def _refuse_serial_in_children(device: str, child: list[bool], refuse: Any) -> None:
+    """Refuse a child's opening of the virtual serial port and its writes on the port it
+    inherited (pyserial opens it with ``os.open`` and writes with ``os.write``)."""
+    real_open, real_write = os.open, os.write
+    try:
+        port = os.stat(device)
+    except OSError:  # gone: nothing to open or write
+        return
+
+    def is_port(fd: int) -> bool:
+        try:
+            found = os.fstat(fd)
+        except OSError:
+            return False
+        return (found.st_dev, found.st_ino) == (port.st_dev, port.st_ino)
+
+    def open_(path: Any, flags: int, *args: Any, **kwargs: Any) -> int:
+        fd = real_open(path, flags, *args, **kwargs)
+        if child[0] and is_port(fd):
+            os.close(fd)
+            refuse("open the simulator's serial port")
+        return fd
+
+    def write(fd: int, data: Any) -> int:
+        if child[0] and is_port(fd):
+            refuse("write to the simulator")
+        return real_write(fd, data)
+
+    os.open = open_
+    os.write = write
+
+
 def _chain() -> None:
     """Run the next ``sitecustomize`` on the path, if the environment has one."""
     here = os.path.dirname(os.path.abspath(__file__))
@@ -765,4 +880,5 @@ def _chain() -> None:
 
 if os.environ.get("SIMMER_LOCKSTEP"):
     _install(os.environ["SIMMER_LOCKSTEP"])
+    _refuse_in_children()
 _chain()
