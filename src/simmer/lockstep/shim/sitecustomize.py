@@ -614,7 +614,7 @@ def _install(address: str) -> None:
                 data = receive()
         else:
             if not program.poll(readable(self), timeout) and timeout > 0:
-                raise socket.timeout("timed out")  # noqa: UP041 (Python 3.8's own)
+                raise socket.timeout("timed out")
             data = receive()
         got = size(data)
         program.got(got)
