@@ -795,7 +795,7 @@ def _refuse_in_children() -> None:
 
     ask = _Clock.ask
 
-    def clock_message(self: _Clock, message: str) -> float:
+    def clock_message(self: _Clock, message: str) -> list[float]:
         refuse("sleep or wait on the simulated clock")
         return ask(self, message)
 
