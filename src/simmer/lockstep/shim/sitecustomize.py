@@ -449,6 +449,11 @@ def _ports(name: str) -> set[int]:
     return {int(port) for port in os.environ.get(name, "").split(",") if port.isdigit()}
 
 
+_IN_CHILD = [False]
+"""Whether this process is one the program started (set by :func:`_refuse_in_children`): its
+clock reads are then the machine's."""
+
+
 def _process_waits() -> tuple[str, ...]:
     """The standard library's files that wait for other processes (see the module doc)."""
     stdlib = os.path.abspath(sysconfig.get_paths()["stdlib"])
@@ -496,25 +501,25 @@ def _install(address: str) -> None:
 
     def monotonic() -> float:
         caller = sys._getframe(1)
-        if waits_on_a_process(caller):
+        if _IN_CHILD[0] or waits_on_a_process(caller):
             return _REAL_MONOTONIC()
         return program.read(from_library(caller))
 
     def wall() -> float:
         caller = sys._getframe(1)
-        if waits_on_a_process(caller):
+        if _IN_CHILD[0] or waits_on_a_process(caller):
             return real_time()
         return epoch + program.read(from_library(caller))
 
     def monotonic_ns() -> int:
         caller = sys._getframe(1)
-        if waits_on_a_process(caller):
+        if _IN_CHILD[0] or waits_on_a_process(caller):
             return real_monotonic_ns()
         return round(program.read(from_library(caller)) * 1e9)
 
     def wall_ns() -> int:
         caller = sys._getframe(1)
-        if waits_on_a_process(caller):
+        if _IN_CHILD[0] or waits_on_a_process(caller):
             return real_time_ns()
         return round((epoch + program.read(from_library(caller))) * 1e9)
 
@@ -759,9 +764,6 @@ CHILD_REFUSED = (
     "(in a thread if it must run alongside)"
 )
 """What a child process is told when it uses the simulator (a RuntimeError)."""
-_CLOCK_READS = ("time", "monotonic", "perf_counter", "time_ns", "monotonic_ns", "perf_counter_ns")
-_MACHINE_CLOCK = {name: getattr(time, name) for name in _CLOCK_READS}
-"""The clock reads as Python has them (this runs before ``_install`` replaces them)."""
 
 
 def _refuse_in_children() -> None:
@@ -770,7 +772,8 @@ def _refuse_in_children() -> None:
     sleep), a connection to the simulator, a write on one it inherited. The clock has one
     program to wait for, and a child's sleeps and messages would land on it as the machine
     schedules them. Its clock reads are the machine's; anything else it does is its own."""
-    child = [os.environ.setdefault(PROGRAM_PID, str(os.getpid())) != str(os.getpid())]
+    child = _IN_CHILD
+    child[0] = os.environ.setdefault(PROGRAM_PID, str(os.getpid())) != str(os.getpid())
     if hasattr(os, "register_at_fork"):  # a fork copies the program's memory, shim and all
         os.register_at_fork(after_in_child=lambda: child.__setitem__(0, True))
     simulator = _ports("SIMMER_MESSAGE_PORTS") | _ports("SIMMER_REPLY_PORTS")
@@ -800,13 +803,6 @@ def _refuse_in_children() -> None:
         return ask(self, message)
 
     _Clock.ask = clock_message  # type: ignore[method-assign]
-
-    def clock_read(name: str) -> Any:
-        simulated, machine = getattr(time, name), _MACHINE_CLOCK[name]
-        return functools.partial(lambda: machine() if child[0] else simulated())
-
-    for name in _CLOCK_READS:
-        setattr(time, name, clock_read(name))
 
     def guard_connect(real: Any) -> Any:
         def connect(self: socket.socket, address: Any) -> Any:
