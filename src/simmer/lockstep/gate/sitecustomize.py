@@ -2,9 +2,8 @@
 serve stops at once with one plain line, any other goes on to the shim's ``sitecustomize``.
 
 The shim (``../shim/sitecustomize.py``) needs Python 3.8 or later (:data:`OLDEST_PYTHON`); an
-older
-interpreter cannot even parse it, and Python only warns about a ``sitecustomize`` it cannot
-import, then runs the program off the simulated clock. So this file is written in syntax that
+older interpreter cannot even parse it, and Python only warns about a ``sitecustomize`` it
+cannot import, then runs the program off the simulated clock. So this file is written in syntax that
 every Python 2.7 and 3.x parses, and does nothing else: for a usable Python it leaves the path
 and hands over to the next ``sitecustomize`` on it, the shim's.
 """
