@@ -499,39 +499,28 @@ def _install(address: str) -> None:
             )
         program.sleep(seconds)
 
-    def monotonic() -> float:
-        caller = sys._getframe(1)
-        if _IN_CHILD[0] or waits_on_a_process(caller):
-            return _REAL_MONOTONIC()
-        return program.read(from_library(caller))
+    def clock_read(simulated: Callable[[float], Any], machine: Callable[[], Any]) -> Any:
+        """A clock read: ``simulated`` of the simulated time, or the ``machine`` clock in a
+        child process or the standard library's wait for another process (module doc)."""
 
-    def wall() -> float:
-        caller = sys._getframe(1)
-        if _IN_CHILD[0] or waits_on_a_process(caller):
-            return real_time()
-        return epoch + program.read(from_library(caller))
+        def read() -> Any:
+            caller = sys._getframe(1)
+            if _IN_CHILD[0] or waits_on_a_process(caller):
+                return machine()
+            return simulated(program.read(from_library(caller)))
 
-    def monotonic_ns() -> int:
-        caller = sys._getframe(1)
-        if _IN_CHILD[0] or waits_on_a_process(caller):
-            return real_monotonic_ns()
-        return round(program.read(from_library(caller)) * 1e9)
+        # partial objects, like the built-ins they replace, do not bind as methods when a
+        # library keeps one as a class attribute (pyserial's ``TIME = time.monotonic``)
+        return functools.partial(read)
 
-    def wall_ns() -> int:
-        caller = sys._getframe(1)
-        if _IN_CHILD[0] or waits_on_a_process(caller):
-            return real_time_ns()
-        return round((epoch + program.read(from_library(caller))) * 1e9)
+    def nanoseconds(seconds: float) -> int:
+        return round(seconds * 1e9)
 
-    # partial objects, like the built-ins they replace, do not bind as methods when a library
-    # keeps one as a class attribute (pyserial's ``TIME = time.monotonic``)
     time.sleep = functools.partial(sleep)
-    time.monotonic = functools.partial(monotonic)
-    time.perf_counter = functools.partial(monotonic)
-    time.time = functools.partial(wall)
-    time.monotonic_ns = functools.partial(monotonic_ns)
-    time.perf_counter_ns = functools.partial(monotonic_ns)
-    time.time_ns = functools.partial(wall_ns)
+    time.monotonic = time.perf_counter = clock_read(float, _REAL_MONOTONIC)
+    time.time = clock_read(lambda now: epoch + now, real_time)
+    time.monotonic_ns = time.perf_counter_ns = clock_read(nanoseconds, real_monotonic_ns)
+    time.time_ns = clock_read(lambda now: nanoseconds(epoch + now), real_time_ns)
 
     ports: dict[int, int] = {}
     for pair in filter(None, os.environ.get("SIMMER_PORT_MAP", "").split(",")):
