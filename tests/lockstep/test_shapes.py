@@ -1,6 +1,7 @@
 """Every shape of program gives the same run every time (issue 30): a thread that polls the
 reply port while the main thread sleeps, a busy-wait on a serial port's ``in_waiting``, a
-library that reads the clock, ``select`` and socket timeouts, an ``asyncio`` client. Each is
+library that reads the clock, ``select``, ``poll``/``epoll`` and socket timeouts, an
+``asyncio`` client. Each is
 written the way students write them (plain sockets or pyserial), run five times under
 ``simmer run --program --record``, two of them beside a CPU-burning process, and every run
 must record the same events and trace and print the same thing."""
@@ -140,6 +141,24 @@ def test_select_with_a_timeout(tmp_path: Path, capfd: pytest.CaptureFixture[str]
     ticks = sum(int(line.split()[2]) for line in lines if line.startswith("Stopped after"))
     sleeps = [json.loads(e)["value"] for e in events.splitlines() if '"sleep"' in e]
     assert sleeps == [0.1] * ticks  # each select that timed out: 0.1 simulated seconds
+
+
+@pytest.mark.parametrize("kind", ["poll", "epoll"])
+def test_a_poll_object_with_a_timeout(
+    kind: str, tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # select.poll and select.epoll objects wait as select.select does: the reply is ready for
+    # the first poll after its message; a poll with nothing to come is 0.1 simulated seconds.
+    program = f"{SHAPES / 'poll_timeout.py'} {kind}"
+    events, _trace, printed = five_runs(tmp_path, program, {}, capfd)
+    lines = printed.splitlines()
+    assert lines[0].startswith("Readings:")
+    assert lines[0].endswith("] 0")  # no poll timed out before the reply was there
+    assert lines[-1] == "done"
+    ticks = sum(int(line.split()[2]) for line in lines if line.startswith("Stopped after"))
+    assert ticks > 3  # the drives took several tenths of a second each
+    sleeps = [json.loads(e)["value"] for e in events.splitlines() if '"sleep"' in e]
+    assert sleeps == [0.1] * ticks  # each poll that timed out: 0.1 simulated seconds
 
 
 def test_a_socket_timeout(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:

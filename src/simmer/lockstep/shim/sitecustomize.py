@@ -29,13 +29,15 @@ Python imports ``sitecustomize`` at start-up from the first folder on its path t
   ``Popen.wait`` with a timeout sleeps and reads the clock in a loop) keep the wall clock
   for their sleeps and reads: that process runs in real time, and how many turns its wait
   took must not show in the simulation (``pygame.font.SysFont`` waits so for ``fc-list``).
-* Polls on the simulator's connections wait in simulated time: ``select``/``selectors``
-  with a timeout, a socket with a timeout or non-blocking, a serial port's ``in_waiting``.
-  Each first makes sure that everything written was taken and that every reply byte the
-  simulator has sent has arrived (the clock message's `` +`` answers how many it sent), so
-  the first poll after a reply sees it whatever the machine's speed; then, if nothing is
-  ready, a timeout is a sleep of that long, and a zero-timeout poll counts as a clock read
-  (the busy-wait rule). A wait on anything else (a child's pipes) is a wall-clock wait.
+* Polls on the simulator's connections wait in simulated time: ``select`` (``select``,
+  ``poll`` and ``epoll`` objects) and ``selectors`` with a timeout, a socket with a timeout or
+  non-blocking, a serial port's ``in_waiting``. (``select.kqueue``, macOS's, used directly, is
+  not: its ``selectors`` class is.) Each first makes sure that everything written was taken
+  and that every reply byte the simulator has sent has arrived (the clock message's `` +``
+  answers how many it sent), so the first poll after a reply sees it whatever the machine's
+  speed; then, if nothing is ready, a timeout is a sleep of that long, and a zero-timeout poll
+  counts as a clock read (the busy-wait rule). A wait on anything else (a child's pipes) is a
+  wall-clock wait.
 * Threads: simulated time moves only when every thread of the program is waiting for it.
   After its sleep (or a read that moved the clock), a thread returns only when every reply
   byte sent has arrived, no two-port reply waits for a thread that polls the reply port, and
@@ -670,6 +672,10 @@ def _patch_select(program: _Program, ours: Callable[[int], bool]) -> None:
         return _REAL_SELECT(rlist, wlist, xlist, 0)
 
     select.select = select_
+    if hasattr(select, "poll"):
+        select.poll = _poll_factory(select.poll, program, ours, 1000.0)  # type: ignore[misc]
+    if hasattr(select, "epoll"):
+        select.epoll = _poll_factory(select.epoll, program, ours, 1.0)  # type: ignore[misc]
     for name in (
         "SelectSelector",
         "PollSelector",
@@ -680,6 +686,56 @@ def _patch_select(program: _Program, ours: Callable[[int], bool]) -> None:
         cls = getattr(selectors, name, None)
         if cls is not None:
             _patch_selector(cls, program, ours)
+
+
+def _poll_factory(
+    real: Any, program: _Program, ours: Callable[[int], bool], per_second: float
+) -> Any:
+    """``select.poll`` or ``select.epoll`` made to wait in simulated time on a connection to
+    the simulator, as ``select.select`` does (the ``selectors`` made before the shim keep the
+    real ones). ``per_second``: the poll's timeout unit (milliseconds for ``poll``, seconds
+    for ``epoll``); None or a negative timeout waits for ever."""
+
+    class Poll:
+        __doc__ = real.__doc__
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            self._real = real(*args, **kwargs)
+            self._fds: set[int] = set()
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(self._real, name)
+
+        def __enter__(self) -> Any:
+            return self
+
+        def __exit__(self, *exc: object) -> None:
+            self._real.close()
+
+        def register(self, fd: Any, *mask: Any) -> None:
+            self._real.register(fd, *mask)
+            self._fds.add(_fd(fd))
+
+        def unregister(self, fd: Any) -> None:
+            self._real.unregister(fd)
+            self._fds.discard(_fd(fd))
+
+        def poll(self, timeout: Any = None, *more: Any) -> Any:
+            if not any(ours(fd) for fd in self._fds):
+                return self._real.poll(timeout, *more)  # a wait on something else
+            forever = timeout is None or timeout < 0
+            wait = None if forever else float(timeout) / per_second
+            if program.poll(lambda: bool(self._real.poll(0)), wait) or not forever:
+                return self._real.poll(0, *more)
+            with program.waiting():
+                return self._real.poll(timeout, *more)
+
+    if not hasattr(real, "__enter__"):  # a poll object is no context manager
+        del Poll.__enter__, Poll.__exit__
+    if hasattr(real, "fromfd"):
+        Poll.fromfd = staticmethod(real.fromfd)  # type: ignore[attr-defined]
+    Poll.__name__ = Poll.__qualname__ = real.__name__
+    return Poll
 
 
 def _patch_selector(cls: Any, program: _Program, ours: Callable[[int], bool]) -> None:
