@@ -50,9 +50,23 @@ with Transports(runner.bus, sim.config, RunOptions.free_ports(serial=True)) as l
 """
 
 
+def cpu_seconds(pid: int) -> float:
+    """CPU seconds (user and system) a process has used, read from ``/proc`` (NaN elsewhere).
+
+    The server's CPU per query is the figure to compare between versions of SimMeR: queries/s
+    with eight clients also depends on how eight client threads share one interpreter lock,
+    which swings by a third from run to run on two cores; the server's own cost does not."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            fields = stat.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return math.nan
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 @contextmanager
 def simulator(speed: str = "1", cpu: int | None = None) -> Iterator[dict[str, Any]]:
-    """Run a simulator in a child process; yields its ports and serial path."""
+    """Run a simulator in a child process; yields its ports, serial path and process id."""
     proc = subprocess.Popen(
         [sys.executable, "-c", SERVER, speed, *([] if cpu is None else [str(cpu)])],
         stdin=subprocess.PIPE,
@@ -61,7 +75,7 @@ def simulator(speed: str = "1", cpu: int | None = None) -> Iterator[dict[str, An
     assert proc.stdin is not None
     assert proc.stdout is not None
     try:
-        yield json.loads(proc.stdout.readline())
+        yield {**json.loads(proc.stdout.readline()), "pid": proc.pid}
     finally:
         proc.stdin.close()
         proc.stdout.close()
@@ -82,10 +96,21 @@ REPEATS = 3
 (the one least disturbed by other processes), as the core benchmark takes the best of five."""
 
 
-def best_of(make: Callable[[], Client], clients: int, queries: int) -> dict[str, float]:
-    """:func:`measure` repeated :data:`REPEATS` times; the run with the most queries/s."""
-    runs = [measure(make, clients, queries) for _ in range(REPEATS)]
-    return max(runs, key=lambda run: run["qps"])
+def best_of(
+    make: Callable[[], Client], clients: int, queries: int, server: int
+) -> dict[str, float]:
+    """:func:`measure` repeated :data:`REPEATS` times; the run with the most queries/s, and
+    the least server CPU per query (``server_us``) over the runs."""
+    runs = []
+    for _ in range(REPEATS):
+        before = cpu_seconds(server)
+        run = measure(make, clients, queries)
+        run["server_us"] = (cpu_seconds(server) - before) / queries * 1e6
+        runs.append(run)
+    return {
+        **max(runs, key=lambda run: run["qps"]),
+        "server_us": min(run["server_us"] for run in runs),
+    }
 
 
 def measure(make: Callable[[], Client], clients: int, queries: int) -> dict[str, float]:
@@ -286,7 +311,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
                     # on the originals): only the persistent protocol serves many at once.
                     continue
                 queries = args.queries if kind != "two-port" else args.queries // 4
-                stats = best_of(clients_for(kind, where), clients, queries)
+                stats = best_of(clients_for(kind, where), clients, queries, where["pid"])
                 rows.append({"transport": kind, "clients": clients, **stats})
     if hasattr(os, "sched_setaffinity"):
         # On a virtual machine, waking a process on another (idle, halted) virtual CPU can
@@ -295,17 +320,21 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         os.sched_setaffinity(0, {0})
         try:
             with simulator("1", cpu=0) as where:
-                stats = best_of(clients_for("persistent", where), 1, args.queries)
+                stats = best_of(clients_for("persistent", where), 1, args.queries, where["pid"])
             rows.append({"transport": "persist 1cpu", "clients": 1, **stats})
         finally:
             os.sched_setaffinity(0, everywhere)
     print(f"control link (best of {REPEATS} runs of each; 'persist 1cpu': client and server")
-    print("pinned to one CPU, without the cost of waking another CPU)")
-    print(f"{'transport':<13} {'clients':>7} {'median ms':>10} {'p95 ms':>8} {'queries/s':>10}")
+    print("pinned to one CPU, without the cost of waking another CPU; 'server us': the")
+    print("simulator's CPU microseconds a query, the figure to compare between versions)")
+    print(
+        f"{'transport':<13} {'clients':>7} {'median ms':>10} {'p95 ms':>8} {'queries/s':>10} "
+        f"{'server us':>10}"
+    )
     for row in rows:
         print(
             f"{row['transport']:<13} {row['clients']:>7} {row['median_ms']:>10.3f} "
-            f"{row['p95_ms']:>8.3f} {row['qps']:>10.0f}"
+            f"{row['p95_ms']:>8.3f} {row['qps']:>10.0f} {row['server_us']:>10.1f}"
         )
     echo = versus_echo()
     print(
