@@ -27,13 +27,18 @@ NOISE = "drives.w0.error.y"
 
 
 def children() -> list[Any]:
-    """This process's child processes, but multiprocessing's resource tracker and fork server
-    (each started with the first pool that needs it, they stay until this process ends)."""
-    return [
-        child
-        for child in psutil.Process().children(recursive=True)
-        if not any(name in " ".join(child.cmdline()) for name in ("resource_tracker", "forkserver"))
-    ]
+    """This process's living child processes (a zombie has ended), but multiprocessing's
+    resource tracker and fork server (each started with the first pool that needs it, they
+    stay until this process ends)."""
+    kept = []
+    for child in psutil.Process().children(recursive=True):
+        try:
+            command = " ".join(child.cmdline())
+        except (psutil.ZombieProcess, psutil.NoSuchProcess):
+            continue  # it has ended (a zombie waits only for its parent to collect it)
+        if not any(name in command for name in ("resource_tracker", "forkserver")):
+            kept.append(child)
+    return kept
 
 
 @pytest.fixture(scope="module")
