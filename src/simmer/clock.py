@@ -97,6 +97,16 @@ class Clock(Protocol):
         """A message of ``size`` bytes (not a clock or localization one) is being answered."""
         ...
 
+    def now(self) -> float:
+        """The program's simulated time: when what it sends now leaves it (the link model's
+        clock, :class:`simmer.transport.link.Link`)."""
+        ...
+
+    def advance_to(self, when: float) -> None:
+        """The program cannot go on before simulated time ``when`` (a reply on the link
+        model arrives then)."""
+        ...
+
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Act on a clock message now: answer it, or keep it until its time comes."""
         ...
@@ -194,6 +204,13 @@ class RealTimeClock(_Counted):
         """Count the message's bytes; in real time a message costs no simulated time."""
         self.took(size)
 
+    def now(self) -> float:
+        """The simulation's time: the wall clock paces it."""
+        return self.sim.time
+
+    def advance_to(self, when: float) -> None:
+        """Nothing: the wall clock paces the run (the link holds its replies back itself)."""
+
     def start(self, request: Request, clock: ClockMessage) -> None:
         """``!sleep``/``!idle`` wait for simulated time; ``!time``/``!sync`` answer now."""
         self.emit(clock)
@@ -253,6 +270,15 @@ class LockstepClock(_Counted):
         self.time = max(self.time, self.sim.time) + self.link_delay
         self._reads = 0
         self.took(size)
+
+    def now(self) -> float:
+        """The program's clock (the simulation is never ahead of it but by a step)."""
+        return max(self.time, self.sim.time)
+
+    def advance_to(self, when: float) -> None:
+        """Move the program's clock to ``when`` if it is behind: the simulation steps there
+        before the loop takes the next message."""
+        self.time = max(self.time, when)
 
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Advance the program's clock as the message asks and wait until the simulation is

@@ -25,15 +25,16 @@ simulated seconds and last ``dropout_seconds``.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from simmer.config.link import LinkParams
 
-__all__ = ["Carried", "Link", "LinkClock", "LinkCounts", "LinkModel"]
+__all__ = ["Carried", "Link", "LinkClock", "LinkCounts", "LinkModel", "Wire"]
 
 TO_ROBOT = "to robot"
 TO_PROGRAM = "to program"
@@ -194,10 +195,10 @@ class LinkClock(Protocol):
 class Link:
     """The link model between the transports and the program (module doc).
 
-    ``hold(seconds, send)``: how a reply waits for its arrival; on the lockstep clock the
-    clock has moved past it already, so it is sent at once; in real time it waits for the
-    wall clock (a timer on the bus). ``emit(what, detail)``: record what the link did in the
-    run's events."""
+    ``hold(seconds, deliver)``: how a reply waits ``seconds`` of simulated time for its
+    arrival; on the lockstep clock the program's clock has moved past it already, so it is
+    delivered at once; in real time it waits for the wall clock (a timer on the bus).
+    ``emit(what, value, detail)``: record what the link did in the run's events."""
 
     model: LinkModel
     clock: LinkClock
@@ -206,20 +207,22 @@ class Link:
 
     def inbound(self, data: bytes) -> bytes:
         """A command message from the program, as it reaches the robot (maybe shorter,
-        maybe changed, maybe empty); the clock may not pass its arrival until it is answered."""
+        maybe changed, maybe empty). The robot acts on it when the loop takes it, as
+        without the model (so when that is never depends on when the bytes reached the
+        loop); its reply leaves no earlier than its arrival (:meth:`outbound`), so the
+        program waits the whole way there and back."""
         carried = self.model.carry(data, self.clock.now(), TO_ROBOT)
-        self.clock.advance_to(carried.arrives)
         self._said(carried, data, TO_ROBOT)
         return carried.data
 
-    def outbound(self, data: bytes, send: Callable[[bytes], None]) -> None:
-        """A reply toward the program: ``send`` what arrives, when it arrives."""
+    def outbound(self, data: bytes, deliver: Callable[[bytes], None]) -> None:
+        """A reply toward the program: ``deliver`` what arrives (maybe nothing) when it
+        arrives."""
         now = self.clock.now()
         carried = self.model.carry(data, now, TO_PROGRAM)
         self.clock.advance_to(carried.arrives)
         self._said(carried, data, TO_PROGRAM)
-        if carried.data:
-            self.hold(carried.arrives - now, lambda: send(carried.data))
+        self.hold(carried.arrives - now, lambda: deliver(carried.data))
 
     def _said(self, carried: Carried, data: bytes, toward: str) -> None:
         """Record a message the link hurt (lost bytes, flipped bits, a dropout)."""
@@ -227,4 +230,39 @@ class Link:
             self.emit("link-dropout", float(len(data)), f"{toward}: {data[:40]!r} lost whole")
         elif carried.lost or carried.corrupted:
             detail = f"{toward}: {data[:40]!r} -> {carried.data[:40]!r}"
-            self.emit("link-lost" if carried.lost else "link-corrupted", carried.lost, detail)
+            value = float(carried.lost or carried.corrupted)
+            self.emit("link-lost" if carried.lost else "link-corrupted", value, detail)
+
+
+class Wire:
+    """One connection's way back to the program: what is sent goes out in the order it was
+    given, a reply over the link when the link delivers it (:meth:`reply`), the simulator's
+    own answers (a clock message's, ``?``) untouched but never ahead of a reply held before
+    them (:meth:`direct`). Without a link, both just ``send``."""
+
+    def __init__(self, link: Link | None, send: Callable[[bytes], None]) -> None:
+        self.link = link
+        self.send = send
+        self._queue: deque[list[Any]] = deque()
+
+    def reply(self, data: bytes) -> None:
+        """A reply over the robot's link."""
+        if self.link is None:
+            self.send(data)
+            return
+        entry: list[Any] = [b"", False]
+        self._queue.append(entry)
+        self.link.outbound(data, lambda got: self._arrived(entry, got))
+
+    def direct(self, data: bytes) -> None:
+        """An answer that is not on the robot's link, after whatever is held."""
+        if not self._queue:
+            self.send(data)
+            return
+        self._queue.append([data, True])
+
+    def _arrived(self, entry: list[Any], data: bytes) -> None:
+        entry[0], entry[1] = data, True
+        while self._queue and self._queue[0][1]:
+            got = self._queue.popleft()[0]
+            self.send(got)

@@ -243,6 +243,8 @@ def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
         TEXT,
         20,
     )
+    if (link := outcome.link_text()) is not None:
+        r.draw_text(link, (REPLIES_X, ROWS[1] if outcome.project is None else ROWS[2]), TEXT, 18)
 
 
 def paint_switched_off(
