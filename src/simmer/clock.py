@@ -18,6 +18,7 @@ aside by a transport): a clock message's `` @N`` waits on that count in either c
 
 from __future__ import annotations
 
+import heapq
 import math
 import threading
 from collections.abc import Callable
@@ -107,6 +108,11 @@ class Clock(Protocol):
         model arrives then)."""
         ...
 
+    def at(self, when: float, callback: Callable[[], None]) -> None:
+        """Loop thread: call ``callback()`` once simulated time reaches ``when`` (a reply
+        the link model holds back until it arrives)."""
+        ...
+
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Act on a clock message now: answer it, or keep it until its time comes."""
         ...
@@ -143,6 +149,20 @@ class _Counted:
         self.sent = 0
         """Bytes sent to the clients so far (:meth:`gave`)."""
         self._owed: list[Callable[[], int]] = []
+        self._timers: list[tuple[float, int, Callable[[], None]]] = []
+        self._order = 0
+
+    def at(self, when: float, callback: Callable[[], None]) -> None:
+        """Call ``callback()`` once simulated time reaches ``when`` (loop thread), in the
+        order asked among those due together."""
+        self._order += 1
+        heapq.heappush(self._timers, (when, self._order, callback))
+
+    def fire(self) -> None:
+        """Call the callbacks whose simulated time has come."""
+        timers = self._timers
+        while timers and timers[0][0] <= self.sim.time + EPSILON:
+            heapq.heappop(timers)[2]()
 
     @property
     def taken(self) -> int:
@@ -234,7 +254,10 @@ class RealTimeClock(_Counted):
         """Nothing: in real time a message costs no simulated time."""
 
     def settle(self) -> None:
-        """Answer each wait whose simulated time has passed with the simulated time."""
+        """Call what waits for simulated time (:meth:`at`), answer each wait whose simulated
+        time has passed with the simulated time."""
+        if self._timers:
+            self.fire()
         if not self.waits:
             return
         sim = self.sim
@@ -347,7 +370,10 @@ class LockstepClock(_Counted):
         self.settle()
 
     def settle(self) -> None:
-        """Answer each wait the simulation has reached with the program's clock."""
+        """Call what waits for simulated time (:meth:`at`), answer each wait the simulation
+        has reached with the program's clock."""
+        if self._timers:
+            self.fire()
         if not self.waits:
             return
         sim = self.sim

@@ -164,18 +164,16 @@ class Served:
 
 def make_link(sim: Simulation, runner: Runner) -> Link | None:
     """The run's link model, if its configuration turns one on (``[link]``): its draws from
-    the run's seed, its times on the runner's clock, a reply held back on a timer of the bus
-    in real time (the seconds divided by the speed), what it did in the run's events."""
+    the run's seed, its times on the runner's clock (in real time a reply is held back until
+    the simulation reaches its arrival), what it did in the run's events."""
     params = sim.config.settings.link.resolved()
     if params is None:
         return None
     clock = runner.clock
-    bus = runner.bus
 
     def hold(seconds: float, deliver: Callable[[], None]) -> None:
-        speed = runner.speed
-        if clock.answers_at_once and speed is not None and seconds > 0:
-            bus.call_later(seconds / speed, deliver)
+        if clock.answers_at_once and seconds > 0:  # real time: until the simulation is there
+            clock.at(sim.time + seconds, deliver)
         else:  # lockstep: the program's clock has moved past the arrival already
             deliver()
 

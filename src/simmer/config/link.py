@@ -116,13 +116,18 @@ class LinkSettings(BaseModel):
     @model_validator(mode="after")
     def _keys_need_a_link(self) -> LinkSettings:
         if self.preset == "off":
-            given = sorted(k for k in self.model_fields_set if k != "preset")
+            given = sorted(k for k in self._given())
             if given:
                 raise ValueError(
                     f"link.{given[0]} is set but link.preset is 'off' (the link model is off); "
                     "set preset = 'custom' or a named preset such as 'hc05-9600'"
                 )
         return self
+
+    def _given(self) -> dict[str, float]:
+        """The keys set beside the preset (a recorded run writes the others as null)."""
+        fields = self.model_fields_set - {"preset"}
+        return {k: v for k in fields if (v := getattr(self, k)) is not None}
 
     @property
     def on(self) -> bool:
@@ -133,7 +138,4 @@ class LinkSettings(BaseModel):
         """The link's values: the preset's, with each key set here instead (None: off)."""
         if self.preset == "off":
             return None
-        base = PRESETS[self.preset]
-        values = {k: getattr(self, k) for k in self.model_fields_set if k != "preset"}
-        merged = {k: v for k, v in values.items() if v is not None}
-        return LinkParams(**{**base.__dict__, **merged})
+        return LinkParams(**{**PRESETS[self.preset].__dict__, **self._given()})

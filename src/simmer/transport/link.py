@@ -197,7 +197,8 @@ class Link:
 
     ``hold(seconds, deliver)``: how a reply waits ``seconds`` of simulated time for its
     arrival; on the lockstep clock the program's clock has moved past it already, so it is
-    delivered at once; in real time it waits for the wall clock (a timer on the bus).
+    delivered at once; in real time it waits until the simulation gets there
+    (:meth:`simmer.clock.Clock.at`).
     ``emit(what, value, detail)``: record what the link did in the run's events."""
 
     model: LinkModel
