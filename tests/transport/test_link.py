@@ -150,5 +150,8 @@ def test_a_key_with_the_link_off_is_one_plain_line_naming_it() -> None:
     with pytest.raises(Exception, match=r"link\.baud is set but link\.preset is 'off'.*custom"):
         make_config(data)
     data["link"] = {"preset": "hc05-9600", "baud": 1}
-    with pytest.raises(Exception, match="baud"):
+    with pytest.raises(Exception, match=r"link\.baud.*1 baud is outside 300 to .*MIN_BAUD"):
+        make_config(data)
+    data["link"] = {"preset": "hc05-9600", "latency": 3600}
+    with pytest.raises(Exception, match=r"link\.latency.*outside 0 to 60 s \(MAX_LINK_SECONDS"):
         make_config(data)

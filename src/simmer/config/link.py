@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from simmer.devices.base import SETTINGS_CONFIG
 
@@ -78,22 +78,18 @@ class LinkSettings(BaseModel):
     )
     baud: float | None = Field(
         None,
-        ge=MIN_BAUD,
-        le=MAX_BAUD,
         description=f"Bits per second, {MIN_BAUD:g} to {MAX_BAUD:,.0f}; a byte is 10 bits "
         "(9600: 1.04 ms a byte).",
     )
     latency: float | None = Field(
         None,
-        ge=0,
-        le=MAX_LINK_SECONDS,
-        description="Seconds each message waits before its first byte moves.",
+        description=f"Seconds (at most {MAX_LINK_SECONDS:g}) each message waits before its "
+        "first byte moves.",
     )
     jitter: float | None = Field(
         None,
-        ge=0,
-        le=MAX_LINK_SECONDS,
-        description="Most seconds added to latency, drawn uniformly per message.",
+        description=f"Most seconds (at most {MAX_LINK_SECONDS:g}) added to latency, drawn "
+        "uniformly per message.",
     )
     loss: float | None = Field(
         None, ge=0, le=1, description="Chance that a byte is lost, either way (0 to 1)."
@@ -108,10 +104,29 @@ class LinkSettings(BaseModel):
     )
     dropout_seconds: float | None = Field(
         None,
-        ge=0,
-        le=MAX_LINK_SECONDS,
-        description="Seconds a dropout lasts; every byte sent meanwhile is lost.",
+        description=f"Seconds (at most {MAX_LINK_SECONDS:g}) a dropout lasts; every byte sent "
+        "meanwhile is lost.",
     )
+
+    @field_validator("baud")
+    @classmethod
+    def _baud(cls, value: float | None) -> float | None:
+        if value is not None and not MIN_BAUD <= value <= MAX_BAUD:
+            raise ValueError(
+                f"{value:g} baud is outside {MIN_BAUD:g} to {MAX_BAUD:,.0f} (MIN_BAUD, "
+                "MAX_BAUD in simmer/config/link.py); an HC-05 runs at 9600 unless set otherwise"
+            )
+        return value
+
+    @field_validator("latency", "jitter", "dropout_seconds")
+    @classmethod
+    def _seconds(cls, value: float | None) -> float | None:
+        if value is not None and not 0 <= value <= MAX_LINK_SECONDS:
+            raise ValueError(
+                f"{value:g} s is outside 0 to {MAX_LINK_SECONDS:g} s (MAX_LINK_SECONDS in "
+                "simmer/config/link.py); a Bluetooth link's is tens of milliseconds"
+            )
+        return value
 
     @model_validator(mode="after")
     def _keys_need_a_link(self) -> LinkSettings:
