@@ -109,11 +109,15 @@ class Transports:
             lines.append(f"virtual serial port: {self.serial.path}{link}; replies {self.protocol}")
         if self.link_model is not None:
             p = self.link_model.model.params
+            drops = (
+                f"dropouts of {p.dropout_seconds:g} s every {p.dropout_every:g} s on average"
+                if p.dropout_every > 0 and p.dropout_seconds > 0
+                else "no dropouts"
+            )
             lines.append(
                 f"link model {p.preset}: {p.baud:g} baud, latency {p.latency * 1000:g} ms "
                 f"+ up to {p.jitter * 1000:g} ms, loss {p.loss:g} and corruption "
-                f"{p.corruption:g} a byte, dropouts of {p.dropout_seconds:g} s every "
-                f"{p.dropout_every:g} s on average (docs/link.md)"
+                f"{p.corruption:g} a byte, {drops} (docs/link.md)"
             )
         return lines
 
