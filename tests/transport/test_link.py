@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -155,3 +156,16 @@ def test_a_key_with_the_link_off_is_one_plain_line_naming_it() -> None:
     data["link"] = {"preset": "hc05-9600", "latency": 3600}
     with pytest.raises(Exception, match=r"link\.latency.*outside 0 to 60 s \(MAX_LINK_SECONDS"):
         make_config(data)
+
+
+def test_simmer_check_says_the_link_model_is_on(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from simmer.cli import app
+
+    path = tmp_path / "robot.toml"
+    path.write_text('[link]\npreset = "hc05-9600"\nloss = 0.001\n', encoding="utf-8")
+    said = CliRunner().invoke(app, ["check", str(path)]).output
+    assert "Link model hc05-9600: 9600 baud, 12 ms latency, 0.001 of bytes lost" in said
+    path.write_text("", encoding="utf-8")
+    assert "Link model" not in CliRunner().invoke(app, ["check", str(path)]).output
