@@ -21,6 +21,7 @@ from simmer.options import RunOptions
 from simmer.runner import Runner
 from simmer.serve import make_link
 from simmer.transport import Transports
+from simmer.transport.link import LinkModel
 from simmer.world.events import CommandEvent, Event, RunEvent
 
 from helpers import default_data, make_config, wait_for
@@ -211,6 +212,44 @@ def test_a_lossy_serial_link_repeats_and_the_client_resynchronises(
     # a late reply never shifts the rest: almost every reading is the wall 39.5 in away
     nan, total = first.split("\n")[1].split()[1:4:2]
     assert abs(float(total) / (good - int(nan)) - 39.5) < 1.0
+
+
+DROPOUT = """\
+import sys, time
+from simmer.client import connect
+from simmer.errors import ReplyTimeout
+
+robot = connect(timeout=0.3)
+for at in map(float, sys.argv[1:]):
+    time.sleep(at - time.monotonic())
+    try:
+        print(at, "reply", robot.read("u0"))
+    except ReplyTimeout:
+        print(at, "timeout")
+"""
+"""Reads at the times given, printing whether each was answered."""
+
+
+@pytest.mark.slow
+def test_a_dropout_loses_what_is_sent_in_it_and_the_link_comes_back_after(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    link = {"preset": "custom", "dropout_every": 5.0, "dropout_seconds": 2.0}
+    sim = linked(**link)
+    params = sim.config.settings.link.resolved()
+    assert params is not None
+    start, end = LinkModel(params, sim.stream).window  # the run's first dropout, from its seed
+    assert end - start == 2.0
+    assert start > 0.5  # seed 11's first dropout leaves time to read before it
+    times = [start - 0.2, start + 0.1, start + 1.5, end + 0.1, end + 0.5]
+    script = tmp_path / "dropout.py"
+    script.write_text(DROPOUT, encoding="utf-8")
+    served = run_program(sim, f"{sys.executable} {script} " + " ".join(map(repr, times)))
+    out = capfd.readouterr().out
+    assert served.exit_status == 0, out
+    said = [line.split()[1] for line in out.splitlines()]
+    assert said == ["reply", "timeout", "timeout", "reply", "reply"]
+    assert served.outcome.report().link["dropouts"] == 1  # type: ignore[index]
 
 
 @pytest.mark.slow
