@@ -157,8 +157,9 @@ class LinkModel:
         arrives = start + wait + size * p.byte_seconds
         self._free[toward] = arrives
         lost = set(self._loss.hits(size))
-        flipped = [i for i in self._flips.hits(size) if i not in lost]
-        bits = [int(self._bits.integers(8)) for _ in flipped]
+        hits = self._flips.hits(size)
+        bits = [int(self._bits.integers(8)) for _ in hits]  # drawn whatever else is lost
+        flips = [(i, bit) for i, bit in zip(hits, bits, strict=True) if i not in lost]
         down = self.dropped(start)
         counts = self.counts
         counts.messages += 1
@@ -169,13 +170,13 @@ class LinkModel:
             counts.in_dropout += 1
             return Carried(b"", arrives, size, 0, True)
         out = bytearray(data)
-        for index, bit in zip(flipped, bits, strict=True):
+        for index, bit in flips:
             out[index] ^= 1 << bit
         for index in sorted(lost, reverse=True):
             del out[index]
         counts.lost += len(lost)
-        counts.corrupted += len(flipped)
-        return Carried(bytes(out), arrives, len(lost), len(flipped), False)
+        counts.corrupted += len(flips)
+        return Carried(bytes(out), arrives, len(lost), len(flips), False)
 
 
 class LinkClock(Protocol):
