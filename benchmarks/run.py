@@ -14,6 +14,7 @@ SUITES = [
     "bench_cli",
     "bench_core",
     "bench_link",
+    "bench_link_model",
     "bench_lockstep",
     "bench_soak",
     "bench_window",

@@ -129,14 +129,51 @@ class StreamLink:
         self.address = f"{host}:{port}"
         self.last_text: str | None = None
         self._sock = _connect_tcp(host, port, timeout)
+        self._stale = False
+        """A reply failed (timed out, garbled): what is left of it is dropped before the next
+        message, so the next reply is read from its own frame's start."""
+
+    def _send(self, data: bytes) -> None:
+        """Send ``data``, first dropping what is left of a reply that failed (a link that
+        loses or delays bytes, such as the robot's Bluetooth, leaves a frame's tail behind)."""
+        if self._stale:
+            self._stale = False
+            before = self._sock.gettimeout()
+            self._sock.settimeout(0.0)
+            try:
+                while self._sock.recv(65536):
+                    pass
+            except (BlockingIOError, InterruptedError):
+                pass
+            finally:
+                self._sock.settimeout(before)
+        self._sock.sendall(data)
+
+    def _header(self, message: str) -> tuple[int, int]:
+        """Read a reply frame's header; a garbled one (a byte lost or changed on the way) is
+        a reply that did not come, and the next message starts afresh."""
+        try:
+            width, count = read_frame_header(_recv_exactly(self._sock, FRAME_HEADER.size))
+            if not 0 < count <= message.count(",") + 1:  # a value per command, never more
+                raise ValueError(f"{count} values for {message.count(',') + 1} commands")
+        except ValueError as exc:
+            self._stale = True
+            raise ReplyTimeout(
+                f"garbled reply to {message!r} from {self.address} ({exc}); the next message "
+                "starts afresh"
+            ) from None
+        return width, count
 
     def exchange(self, message: str) -> list[float]:
-        """Send ``message`` as one line and read its frame."""
+        """Send ``message`` as one line and read its frame (a reply that times out or comes
+        garbled raises :class:`~simmer.errors.ReplyTimeout`, and its rest is dropped before
+        the next message)."""
         try:
-            self._sock.sendall(message.encode() + b"\n")
-            width, count = read_frame_header(_recv_exactly(self._sock, FRAME_HEADER.size))
+            self._send(message.encode() + b"\n")
+            width, count = self._header(message)
             return unpack_replies(_recv_exactly(self._sock, width * count), width)
         except TimeoutError:
+            self._stale = True
             raise ReplyTimeout(f"no reply to {message!r} from {self.address}") from None
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
@@ -161,7 +198,7 @@ class StreamLink:
     def ask(self, message: str) -> tuple[list[float], str | None]:
         """Send a localization message; its values, or the JSON of a document frame."""
         try:
-            self._sock.sendall(message.encode() + b"\n")
+            self._send(message.encode() + b"\n")
             header = _recv_exactly(self._sock, FRAME_HEADER.size)
             if header[:1] == DOCUMENT:
                 rest = _recv_exactly(self._sock, DOCUMENT_HEADER.size - FRAME_HEADER.size)
@@ -172,6 +209,7 @@ class StreamLink:
             width, count = read_frame_header(header)
             return unpack_replies(_recv_exactly(self._sock, width * count), width), None
         except TimeoutError:
+            self._stale = True
             raise ReplyTimeout(f"no reply to {message[:40]!r} from {self.address}") from None
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
@@ -179,12 +217,13 @@ class StreamLink:
     def explain(self) -> str:
         """Why the last message's NaN replies are NaN, one reason a line ("" if none)."""
         try:
-            self._sock.sendall(EXPLAIN + b"\n")
+            self._send(EXPLAIN + b"\n")
             width, size = FRAME_HEADER.unpack(_recv_exactly(self._sock, FRAME_HEADER.size))
             if width != TEXT_WIDTH:
                 raise ConnectionFailed(f"{self.address} answered '?' with values, not text")
             return _recv_exactly(self._sock, size).decode("utf-8", errors="replace")
         except TimeoutError:
+            self._stale = True
             raise ReplyTimeout(f"no answer to '?' from {self.address}") from None
         except OSError as exc:
             raise ConnectionFailed(f"lost the connection to {self.address}: {exc}") from None
@@ -238,7 +277,8 @@ class TwoPortLink:
             return _framed_values(self.last_text, message, frame)
         if not data:
             raise ConnectionFailed(
-                f"the simulator answered {message!r} with nothing: it may speak SimMeR v1.2's "
+                f"the simulator answered {message!r} with nothing: the link lost the reply, "
+                "or it speaks SimMeR v1.2's "
                 "framed text (protocol = 'framed'); connect with framed=True "
                 "(simmer console --framed)"
             )
@@ -273,21 +313,35 @@ class SerialLink:
             self._port = serial.Serial(port, baudrate=baudrate, timeout=timeout)
         except (serial.SerialException, OSError) as exc:
             raise ConnectionFailed(f"cannot open serial port {port}: {exc}") from None
+        self._stale = False
+        """A reply timed out: what came of it late is dropped before the next message."""
+
+    def _write(self, data: bytes) -> None:
+        """Write ``data``, first dropping the late rest of a reply that timed out (so it is
+        never taken for the next message's reply)."""
+        if self._stale:
+            self._stale = False
+            self._port.reset_input_buffer()
+        self._port.write(data)
 
     def exchange(self, message: str) -> list[float]:
-        """Write the message and a newline, read one value per command."""
+        """Write the message and a newline, read one value per command (a reply that does
+        not come whole in time raises :class:`~simmer.errors.ReplyTimeout`; its rest is
+        dropped before the next message)."""
         if self.frame is not None:
             start, end = self.frame
-            self._port.write(f"{start}{message}{end}".encode())
+            self._write(f"{start}{message}{end}".encode())
             data = self._port.read_until(end.encode())
             self.last_text = data.decode("ascii", errors="replace")
             if not data.endswith(end.encode()):
+                self._stale = True
                 raise ReplyTimeout(f"serial reply to {message!r}: {self.last_text!r} so far")
             return _framed_values(self.last_text, message, self.frame)
         size = self.width * (message.count(",") + 1)
-        self._port.write(message.encode() + b"\n")
+        self._write(message.encode() + b"\n")
         data = self._port.read(size)
         if len(data) < size:
+            self._stale = True
             raise ReplyTimeout(f"serial reply to {message!r}: {len(data)} of {size} bytes")
         return unpack_replies(data, self.width)
 

@@ -18,6 +18,7 @@ aside by a transport): a clock message's `` @N`` waits on that count in either c
 
 from __future__ import annotations
 
+import heapq
 import math
 import threading
 from collections.abc import Callable
@@ -97,6 +98,21 @@ class Clock(Protocol):
         """A message of ``size`` bytes (not a clock or localization one) is being answered."""
         ...
 
+    def now(self) -> float:
+        """The program's simulated time: when what it sends now leaves it (the link model's
+        clock, :class:`simmer.transport.link.Link`)."""
+        ...
+
+    def advance_to(self, when: float) -> None:
+        """The program cannot go on before simulated time ``when`` (a reply on the link
+        model arrives then)."""
+        ...
+
+    def at(self, when: float, callback: Callable[[], None]) -> None:
+        """Loop thread: call ``callback()`` once simulated time reaches ``when`` (a reply
+        the link model holds back until it arrives)."""
+        ...
+
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Act on a clock message now: answer it, or keep it until its time comes."""
         ...
@@ -133,6 +149,20 @@ class _Counted:
         self.sent = 0
         """Bytes sent to the clients so far (:meth:`gave`)."""
         self._owed: list[Callable[[], int]] = []
+        self._timers: list[tuple[float, int, Callable[[], None]]] = []
+        self._order = 0
+
+    def at(self, when: float, callback: Callable[[], None]) -> None:
+        """Call ``callback()`` once simulated time reaches ``when`` (loop thread), in the
+        order asked among those due together."""
+        self._order += 1
+        heapq.heappush(self._timers, (when, self._order, callback))
+
+    def fire(self) -> None:
+        """Call the callbacks whose simulated time has come."""
+        timers = self._timers
+        while timers and timers[0][0] <= self.sim.time + EPSILON:
+            heapq.heappop(timers)[2]()
 
     @property
     def taken(self) -> int:
@@ -194,6 +224,13 @@ class RealTimeClock(_Counted):
         """Count the message's bytes; in real time a message costs no simulated time."""
         self.took(size)
 
+    def now(self) -> float:
+        """The simulation's time: the wall clock paces it."""
+        return self.sim.time
+
+    def advance_to(self, when: float) -> None:
+        """Nothing: the wall clock paces the run (the link holds its replies back itself)."""
+
     def start(self, request: Request, clock: ClockMessage) -> None:
         """``!sleep``/``!idle`` wait for simulated time; ``!time``/``!sync`` answer now."""
         self.emit(clock)
@@ -217,7 +254,10 @@ class RealTimeClock(_Counted):
         """Nothing: in real time a message costs no simulated time."""
 
     def settle(self) -> None:
-        """Answer each wait whose simulated time has passed with the simulated time."""
+        """Call what waits for simulated time (:meth:`at`), answer each wait whose simulated
+        time has passed with the simulated time."""
+        if self._timers:
+            self.fire()
         if not self.waits:
             return
         sim = self.sim
@@ -253,6 +293,15 @@ class LockstepClock(_Counted):
         self.time = max(self.time, self.sim.time) + self.link_delay
         self._reads = 0
         self.took(size)
+
+    def now(self) -> float:
+        """The program's clock (the simulation is never ahead of it but by a step)."""
+        return max(self.time, self.sim.time)
+
+    def advance_to(self, when: float) -> None:
+        """Move the program's clock to ``when`` if it is behind: the simulation steps there
+        before the loop takes the next message."""
+        self.time = max(self.time, when)
 
     def start(self, request: Request, clock: ClockMessage) -> None:
         """Advance the program's clock as the message asks and wait until the simulation is
@@ -321,7 +370,10 @@ class LockstepClock(_Counted):
         self.settle()
 
     def settle(self) -> None:
-        """Answer each wait the simulation has reached with the program's clock."""
+        """Call what waits for simulated time (:meth:`at`), answer each wait the simulation
+        has reached with the program's clock."""
+        if self._timers:
+            self.fire()
         if not self.waits:
             return
         sim = self.sim

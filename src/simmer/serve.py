@@ -31,6 +31,7 @@ from simmer.proctree import descendants, stop_strays
 from simmer.record import RunRecorder
 from simmer.runner import Runner
 from simmer.transport import Transports
+from simmer.transport.link import Link, LinkModel
 from simmer.world import Simulation
 from simmer.world.events import RunEvent
 from simmer.world.outcome import Outcome
@@ -161,6 +162,28 @@ class Served:
         return 0
 
 
+def make_link(sim: Simulation, runner: Runner) -> Link | None:
+    """The run's link model, if its configuration turns one on (``[link]``): its draws from
+    the run's seed, its times on the runner's clock (in real time a reply is held back until
+    the simulation reaches its arrival), what it did in the run's events."""
+    params = sim.config.settings.link.resolved()
+    if params is None:
+        return None
+    clock = runner.clock
+
+    def hold(seconds: float, deliver: Callable[[], None]) -> None:
+        if clock.answers_at_once and seconds > 0:  # real time: until the simulation is there
+            clock.at(sim.time + seconds, deliver)
+        else:  # lockstep: the program's clock has moved past the arrival already
+            deliver()
+
+    def emit(what: str, value: float, detail: str) -> None:
+        if sim.observers:
+            sim.emit(RunEvent(sim.time, what, value, sim.steps, detail))
+
+    return Link(LinkModel(params, sim.stream), clock, hold, emit)
+
+
 def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = print) -> Served:
     """Serve every transport and run ``sim`` until the user quits (Esc, closing the window,
     Ctrl-C, SIGTERM, SIGHUP), ``seconds`` of simulated time pass, the ``program`` (a control
@@ -185,10 +208,13 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     :class:`~simmer.errors.SimmerError` if no window can be opened or something is already at
     ``serial_link``.
     """
-    runner = Runner(
-        sim, speed=options.speed, lockstep=options.lockstep, link_delay=options.link_delay
-    )
+    link_on = sim.config.settings.link.on
+    delay = 0.0 if link_on and options.link_delay is None else options.link_delay
+    runner = Runner(sim, speed=options.speed, lockstep=options.lockstep, link_delay=delay)
     outcome = Outcome.attach(sim)
+    link_model = make_link(sim, runner)
+    if link_model is not None:
+        outcome.link_counts = link_model.model.counts.as_dict
     stop = RunStop()
     ended: list[RunEnd] = []  # who stopped the run first
     said = _Said(echo)
@@ -203,7 +229,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     restore_signals = _stop_on_signals(stop, runner.bus.wake_from_signal, signalled)
     try:  # until the recording is finished, a signal only sets the stop
         try:
-            transports = Transports(runner.bus, sim.config, options, clock=runner.clock)
+            transports = Transports(
+                runner.bus, sim.config, options, clock=runner.clock, link_model=link_model
+            )
             with transports:
                 if options.record is not None:
                     used = options.replace(

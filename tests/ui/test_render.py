@@ -317,3 +317,30 @@ def test_a_snapshot_maker_shares_the_observers_a_simulation_has_already() -> Non
     fresh = SnapshotMaker(Simulation.from_config())
     assert fresh.commands is not log
     fresh.close()
+
+
+def test_the_hud_shows_what_the_link_model_did_under_the_clients() -> None:
+    from simmer.ui.hud import ALARM, CLIENTS_X
+
+    sim = Simulation.from_config()
+    bridge = Bridge(sim)
+    counts = {"messages": 40.0, "bytes": 400.0, "seconds": 1.25, "lost": 3.0}
+    counts |= {"corrupted": 1.0, "dropouts": 1.0, "in_dropout": 2.0}
+    bridge.outcome.link_counts = lambda: counts
+    bridge.local.clients = ["stream 127.0.0.1:50000", "serial /dev/pts/3", "two-port x"]
+    bridge.sync()
+    painted = RecordingRenderer()
+    paint_hud(painted, bridge.latest)
+    texts = {args[0]: args[1:] for args in painted.of("text")}
+    # two clients, then the link's two lines (the first red: bytes were lost)
+    assert "two-port x" not in texts
+    assert texts["link: 3 lost, 1 corrupted"][:2] == ((CLIENTS_X, 64), ALARM)
+    assert texts["1 dropout, 1.25 s on it"][:2] == ((CLIENTS_X, 80), TEXT)
+    bridge.outcome.link_counts = None  # the model off: no link line, every client listed
+    bridge.sync()
+    plain = RecordingRenderer()
+    paint_hud(plain, bridge.latest)
+    texts = {args[0]: args[1:] for args in plain.of("text")}
+    assert "two-port x" in texts
+    assert not any(str(text).startswith("link:") for text in texts)
+    bridge.close()

@@ -211,8 +211,9 @@ def test_report_is_plain_json_data() -> None:
     report = outcome.report()
     data = report.as_dict()
     fields = {field.name for field in dataclasses.fields(OutcomeReport)}
-    # a Lab 1 run has no project figures, and a program that reports no pose no localization
-    assert set(data) == fields - {"project", "localization"}
+    # a Lab 1 run has no project figures, a program that reports no pose no localization, a
+    # run without the link model no link figures
+    assert set(data) == fields - {"project", "localization", "link"}
     assert json.loads(json.dumps(data, allow_nan=False)) == data
     assert data["final_pose"] == list(sim.robot.pose)
     assert data["reached"] is True

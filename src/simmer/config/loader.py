@@ -204,7 +204,18 @@ def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True)
         f"Robot starting {start} "
         f"with {', '.join(parts)}. "
         f"Noise: {describe_noise(config, seed)}. {s.frame_rate:g} steps/s{served}, replies "
-        f"{config.reply_codec().describe()}." + _project(config)
+        f"{config.reply_codec().describe()}." + _link(config) + _project(config)
+    )
+
+
+def _link(config: SimConfig) -> str:
+    """The summary's words on the link model (none when it is off)."""
+    p = config.settings.link.resolved()
+    if p is None:
+        return ""
+    return (
+        f" Link model {p.preset}: {p.baud:g} baud, {p.latency * 1000:g} ms latency, "
+        f"{p.loss:g} of bytes lost (docs/link.md)."
     )
 
 

@@ -20,6 +20,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
+from simmer.config.link import LinkSettings
 from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.devices.registry import DeviceKinds
@@ -118,6 +119,10 @@ class Settings(BaseModel):
         "for an hour).",
     )
     str_encoding: str = Field("utf-8", description="Text encoding of commands.")
+    link: LinkSettings = Field(
+        LinkSettings(),
+        description="How the link to the robot behaves (docs/link.md); off by default.",
+    )
     # Block
     block_position: Point = Field((66.0, 5.0), description="Block centre [x, y], inches.")
     block_rotation: float = Field(0.0, description="Block rotation, degrees from +y.")

@@ -7,6 +7,7 @@ from typing import Any
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
+from simmer.config.link import LinkSettings
 from simmer.config.models import Settings
 from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices import DeviceParams, device_kinds
@@ -18,7 +19,7 @@ PROJECT_TABLES = (ZoneSettings, ScenarioSettings, ScoreSettings)
 def _default(value: Any) -> str:
     if value is PydanticUndefined or value is None:
         return "—"
-    if isinstance(value, PROJECT_TABLES):
+    if isinstance(value, (*PROJECT_TABLES, LinkSettings)):
         return "table below"
     if isinstance(value, BaseModel):
         return "{" + ", ".join(f"{k} = {v:g}" for k, v in value.model_dump().items()) + "}"
@@ -63,6 +64,8 @@ def reference_markdown() -> str:
         lines += [(model.__doc__ or "").strip().splitlines()[0], "", *_table(model)]
     lines += ["", "## `[score]` (the course project's rubric)", ""]
     lines += [(ScoreSettings.__doc__ or "").strip().splitlines()[0], "", *_table(ScoreSettings)]
+    lines += ["", "## `[link]` (the link to the robot, docs/link.md)", ""]
+    lines += [(LinkSettings.__doc__ or "").strip().splitlines()[0], "", *_table(LinkSettings)]
     for name, kind in sorted(device_kinds().items()):
         if kind.__module__.startswith("simmer."):
             lines += ["", f'## `type = "{name}"` ({kind.category})', ""]

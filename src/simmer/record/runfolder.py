@@ -464,6 +464,20 @@ def _localization_rows(outcome: dict[str, Any]) -> list[str]:
     return [f"| Localized (within 3 in and 15 deg to the end; {count} estimates) | {said} |"]
 
 
+def _link_rows(outcome: dict[str, Any]) -> list[str]:
+    """The link model's row of report.md (none when it was off)."""
+    if "link_bytes" not in outcome:
+        return []
+    return [
+        f"| The link (messages, bytes delayed, seconds on it) | "
+        f"{_md(outcome['link_messages'])}, {_md(outcome['link_bytes'])}, "
+        f"{outcome['link_seconds']:.2f} s |",
+        f"| The link: bytes lost, bytes corrupted, dropouts (messages lost in them) | "
+        f"{_md(outcome['link_lost'])}, {_md(outcome['link_corrupted'])}, "
+        f"{_md(outcome['link_dropouts'])} ({_md(outcome['link_in_dropout'])}) |",
+    ]
+
+
 def write_report_md(folder: str | Path) -> Path:
     """Write ``report.md`` from the folder's report.json and manifest: the outcome in plain
     words, and ``path.png`` and ``sensors.png`` if they are there (``simmer plot`` calls this
@@ -541,6 +555,7 @@ def _report_lines(folder: Path, info: dict[str, Any], report: dict[str, Any]) ->
         f"{_md(outcome.get('busy_replies', 0))}, {_md(outcome['nan_replies'])} |",
         f"| Final pose | x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg |",
         *_localization_rows(outcome),
+        *_link_rows(outcome),
         f"| Length of the run | {report['duration']:.2f} s ({_md(report['steps'])} steps), "
         f"{report['wall_seconds']:.1f} s of wall-clock time |",
         f"| How it ended | {ended} |",

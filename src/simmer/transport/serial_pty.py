@@ -39,6 +39,7 @@ from simmer.protocol import (
     ReplyCodec,
 )
 from simmer.transport.bus import ByteCounter, CommandBus, Reply, Timer
+from simmer.transport.link import Link, Wire
 
 log = logging.getLogger("simmer.transport")
 
@@ -74,9 +75,12 @@ class SerialServer:
         timeout: float = 300.0,
         silence: float = SILENCE,
         clock: ByteCounter | None = None,
+        link_model: Link | None = None,
     ) -> None:
         self.bus = bus
         self.clock = clock
+        self.link_model = link_model
+        """The link model its messages and replies cross (None: off)."""
         self.silence = silence
         self.received = 0
         """Bytes read from the port so far (what a test waits on)."""
@@ -96,6 +100,7 @@ class SerialServer:
         """The master side as something the bus's selector can watch."""
         self._buffer = bytearray()
         self._outbox = bytearray()
+        self._wire = Wire(link_model, self._write)
         self._owed: deque[_Owed] = deque()
         self._quiet: Timer | None = None
         self._serving = threading.RLock()
@@ -229,6 +234,12 @@ class SerialServer:
         """Ask for one message, read from ``size`` bytes of the port, to be answered; its
         reply is written once it and every message before it are answered. A failure is
         logged (the first in full) and serving goes on."""
+        if self.link_model is not None:  # what reaches the robot over the link model
+            ending = b"\n" * (size - len(data))  # the line's end costs the wire time too
+            data = self.link_model.inbound(data + ending).rstrip(b"\n")
+            if not data:  # lost whole: no message will take its bytes
+                self._set_aside(size)
+                return
         try:
             decoded = replace(self.codec.decode(data), size=size)
         except Exception as exc:
@@ -265,10 +276,20 @@ class SerialServer:
                 if owed.future.exception() is not None:
                     continue  # the simulation stopped
                 try:
-                    self._outbox += self.codec.encode(owed.decoded, owed.future.result())
+                    reply = self.codec.encode(owed.decoded, owed.future.result())
                 except Exception as exc:
                     self._failure(exc)
-            if self._outbox and not self._stopping.is_set():
+                else:
+                    self._wire.reply(reply)
+            self._update()
+
+    def _write(self, data: bytes) -> None:
+        """Write ``data`` after what waits (a reply that reached the program's end)."""
+        with self._serving:
+            if self._stopping.is_set():
+                return
+            self._outbox += data
+            if self._outbox:
                 self._flush()
             self._update()
 

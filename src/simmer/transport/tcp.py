@@ -60,6 +60,7 @@ from simmer.protocol import (
     printable,
 )
 from simmer.transport.bus import ByteCounter, CommandBus, Reply, Request
+from simmer.transport.link import Link, Wire
 
 log = logging.getLogger("simmer.transport")
 
@@ -466,8 +467,11 @@ class TwoPortServer(_Server):
         codec: ReplyCodec | None = None,
         timeout: float = 300.0,
         clock: ByteCounter | None = None,
+        link_model: Link | None = None,
     ) -> None:
         super().__init__(bus, host, [port_rx, port_tx], timeout, clock=clock)
+        self.link_model = link_model
+        """The link model its messages and replies cross (None: off)."""
         if clock is not None:
             clock.owes(lambda: len(self.pending))
         self.port_rx, self.port_tx = self.ports
@@ -605,9 +609,21 @@ class _MessageConnection(_Connection):
 
     def end(self) -> None:
         """Submit the message received (if any) and close."""
-        if self.data:
-            decoded = replace(self.two_port.codec.decode(bytes(self.data)), size=len(self.data))
-            self.two_port.arrived(decoded, self.order, self.client)
+        two_port = self.two_port
+        data = bytes(self.data)
+        if data and two_port.link_model is not None:  # over the link model: what reaches the robot
+            got = two_port.link_model.inbound(data)
+            if got:
+                decoded = replace(two_port.codec.decode(got), size=len(data))
+                two_port.arrived(decoded, self.order, self.client)
+            else:
+                log.debug("%s: the link lost the whole message", self.client)
+                if two_port.clock is not None:
+                    two_port.clock.took(len(data))
+                    two_port.bus.interrupt()
+        elif data:
+            decoded = replace(two_port.codec.decode(data), size=len(data))
+            two_port.arrived(decoded, self.order, self.client)
         else:
             log.debug("%s connected and sent nothing: no message", self.client)
         self.close()
@@ -640,6 +656,16 @@ class _ReplyConnection(_Connection):
         answered = [r for p in collected if (r := p.replies()) is not None]
         data = self.two_port.codec.encode_many(answered)
         self.close_when_sent = True
+        if data and self.two_port.link_model is not None:
+            self.two_port.link_model.outbound(data, self.arrived)
+        else:
+            self.arrived(data)
+
+    def arrived(self, data: bytes) -> None:
+        """Send what reached the program's end of the link and close (at once if nothing
+        did)."""
+        if self.closed:
+            return
         if data:
             self.send(data)
         else:
@@ -686,8 +712,11 @@ class StreamServer(_Server):
         idle_timeout: float = 3600.0,
         lenient: bool = False,
         clock: ByteCounter | None = None,
+        link_model: Link | None = None,
     ) -> None:
         super().__init__(bus, host, [port], timeout, idle_timeout, clock)
+        self.link_model = link_model
+        """The link model its command messages and their replies cross (None: off)."""
         self.port = self.ports[0]
         self.width = width
         self.encoding = encoding
@@ -747,6 +776,7 @@ class _StreamConnection(_Connection):
         self.waiting_for = "owed"  # what the deadline is for: a whole message, or the next one
         self.reasons: list[str] = []  # why the last answered message's NaN replies are NaN
         self.pumping = False  # in :meth:`pump` (a reply sent meanwhile leaves the lines to it)
+        self.wire = Wire(server.link_model, self.send)
 
     def reading(self) -> bool:
         """Read while the connection may have more in flight."""
@@ -798,12 +828,28 @@ class _StreamConnection(_Connection):
                 self.explain_later()
             elif line.startswith(META_PREFIX):
                 self.submit(decode_meta(line, end + 1), now)
+            elif self.stream.link_model is not None and not line.startswith(CLOCK_PREFIX):
+                self.submit_linked(self.stream.link_model, line)
             else:
                 self.submit(self.stream.decode(line), now)
             now = False
         self.pumping = False
         self.rearm()
         self.update_events()
+
+    def submit_linked(self, link: Link, line: bytes) -> None:
+        """A command line over the link model: what reaches the robot is answered (a line
+        whose end was lost still ends, as the sketch's silence ends it), its bytes counted
+        as the program wrote them; nothing, if every byte was lost (then they count as taken
+        at once: a clock message's `` @N`` waits for no message that will never come)."""
+        stream = self.stream
+        size = len(line) + 1
+        got = link.inbound(line + b"\n").rstrip(b"\n")
+        if got:
+            self.submit(decode_message(got, stream.encoding, size=size, lenient=stream.lenient))
+        elif stream.clock is not None:
+            stream.clock.took(size)
+            stream.bus.interrupt()
 
     def rearm(self) -> None:
         """Set the deadline while the client owes us something: ``timeout`` before its first
@@ -870,14 +916,15 @@ class _StreamConnection(_Connection):
         self.reasons = request.reasons
         self.close_when_sent = future is self.last
         if request.answer:  # a localization message's text (``%maze``)
-            self.send(frame_document(request.answer[0]))
+            self.wire.direct(frame_document(request.answer[0]))
             return
         match request.decoded:
             case ClockText() | Refused(clock=True):  # a time needs float64
-                width = 8
-            case CommandText() | LocalizationText() | Refused():
-                width = self.stream.width
-        self.send(frame_replies(values, width))
+                self.wire.direct(frame_replies(values, 8))
+            case LocalizationText():
+                self.wire.direct(frame_replies(values, self.stream.width))
+            case CommandText() | Refused():  # what the robot answers: over the link
+                self.wire.reply(frame_replies(values, self.stream.width))
 
     def explain_later(self) -> None:
         """Answer ``?`` once the messages before it are answered (frames go out in order)."""
@@ -889,4 +936,4 @@ class _StreamConnection(_Connection):
         """Send the reasons of the last answered message as a text frame."""
         self.in_flight -= 1
         if not self.closed:
-            self.send(frame_text("\n".join(self.reasons)))
+            self.wire.direct(frame_text("\n".join(self.reasons)))

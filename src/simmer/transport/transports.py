@@ -8,6 +8,7 @@ import logging
 from simmer.config.models import SimConfig
 from simmer.options import RunOptions
 from simmer.transport.bus import ByteCounter, CommandBus
+from simmer.transport.link import Link
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
 
@@ -29,7 +30,8 @@ class Transports:
     host and ports of ``options`` (the configuration's where they name none:
     :meth:`Ports.resolve <simmer.ports.Ports.resolve>`); the bytes they read and set aside are
     counted by ``clock`` (the runner's, so that a clock message's `` @N`` can wait for them;
-    None: nowhere)."""
+    None: nowhere). With ``link_model`` every transport's command messages and replies cross
+    it (:mod:`simmer.transport.link`)."""
 
     def __init__(
         self,
@@ -38,8 +40,10 @@ class Transports:
         options: RunOptions | None = None,
         *,
         clock: ByteCounter | None = None,
+        link_model: Link | None = None,
     ) -> None:
         settings = config.settings
+        self.link_model = link_model
         options = options if options is not None else RunOptions()
         self.host = options.host if options.host is not None else settings.host
         port_rx, port_tx, stream_port = options.ports.resolve(settings.port_rx, settings.port_tx)
@@ -57,6 +61,7 @@ class Transports:
             codec=codec,
             timeout=settings.timeout,
             clock=clock,
+            link_model=link_model,
         )
         self.serial: SerialServer | None = None
         try:
@@ -70,10 +75,16 @@ class Transports:
                 idle_timeout=settings.idle_timeout,
                 lenient=settings.lenient_commands,
                 clock=clock,
+                link_model=link_model,
             )
             if options.serial or options.serial_link is not None:
                 self.serial = SerialServer(
-                    bus, options.serial_link, codec=codec, timeout=settings.timeout, clock=clock
+                    bus,
+                    options.serial_link,
+                    codec=codec,
+                    timeout=settings.timeout,
+                    clock=clock,
+                    link_model=link_model,
                 )
         except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
@@ -96,6 +107,18 @@ class Transports:
         if self.serial is not None:
             link = f" (link {self.serial.link})" if self.serial.link else ""
             lines.append(f"virtual serial port: {self.serial.path}{link}; replies {self.protocol}")
+        if self.link_model is not None:
+            p = self.link_model.model.params
+            drops = (
+                f"dropouts of {p.dropout_seconds:g} s every {p.dropout_every:g} s on average"
+                if p.dropout_every > 0 and p.dropout_seconds > 0
+                else "no dropouts"
+            )
+            lines.append(
+                f"link model {p.preset}: {p.baud:g} baud, latency {p.latency * 1000:g} ms "
+                f"+ up to {p.jitter * 1000:g} ms, loss {p.loss:g} and corruption "
+                f"{p.corruption:g} a byte, {drops} (docs/link.md)"
+            )
         return lines
 
     def close(self) -> None:

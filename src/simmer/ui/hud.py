@@ -167,12 +167,16 @@ def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
         r.draw_text(line, (COMMANDS_X, 32 + 16 * i), TEXT, 18)
 
     clients = snap.clients
+    link = snap.outcome.link if snap.outcome is not None else None
     if clients is not None:
         r.draw_text("connected clients", (CLIENTS_X, ROWS[0]), DIM, 20)
-        for i, client in enumerate(clients[:5]):
+        shown = clients[: 5 if link is None else 2]  # the link's two lines below them
+        for i, client in enumerate(shown):
             r.draw_text(client, (CLIENTS_X, 32 + 16 * i), TEXT, 18)
         if not clients:
             r.draw_text("none", (CLIENTS_X, 32), DIM, 18)
+        if link is not None:
+            paint_link(r, link, 32 + 16 * max(1, len(shown)))
     if snap.switched_off:
         paint_switched_off(r, snap.switched_off, width)
     if snap.recording is not None:  # the file's name is in the notice
@@ -242,6 +246,25 @@ def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
         (REPLIES_X, ROWS[0]),
         TEXT,
         20,
+    )
+
+
+def paint_link(r: Renderer, link: dict[str, float], y: int) -> None:
+    """What the link model did, in two short lines under the connected clients: what it
+    lost or changed (lit while anything was), and its dropouts and time."""
+    hurt = link["lost"] or link["corrupted"]
+    r.draw_text(
+        f"link: {link['lost']:.0f} lost, {link['corrupted']:.0f} corrupted",
+        (CLIENTS_X, y),
+        ALARM if hurt else TEXT,
+        18,
+    )
+    drops = "dropout" if link["dropouts"] == 1 else "dropouts"
+    r.draw_text(
+        f"{link['dropouts']:.0f} {drops}, {link['seconds']:.2f} s on it",
+        (CLIENTS_X, y + 16),
+        TEXT,
+        18,
     )
 
 

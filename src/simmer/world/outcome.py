@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -75,6 +76,9 @@ class OutcomeReport:
     maze has zones: a Lab 1 run's outcome is as before)."""
     localization: LocalizationReport | None = None
     """How well the program's reported poses matched the truth (None if it reported none)."""
+    link: dict[str, float] | None = None
+    """What the link model did (messages, bytes, seconds, lost, corrupted, dropouts; None
+    when it is off): see :class:`simmer.transport.link.LinkCounts`."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
@@ -85,7 +89,19 @@ class OutcomeReport:
         data.pop("localization")
         if self.localization is not None:
             data.update(self.localization.as_dict())
+        link = data.pop("link")
+        data.update({f"link_{key}": value for key, value in (link or {}).items()})
         return data
+
+    def link_text(self) -> str | None:
+        """One line on what the link model did (None when it is off)."""
+        if self.link is None:
+            return None
+        c = self.link
+        return (
+            f"link: {c['bytes']:.0f} bytes delayed ({c['seconds']:.2f} s in all), "
+            f"{c['lost']:.0f} lost, {c['corrupted']:.0f} corrupted, {c['dropouts']:.0f} dropouts"
+        )
 
     def summary(self) -> str:
         """A few lines a student reads at the end of a run."""
@@ -102,6 +118,7 @@ class OutcomeReport:
         project = [self.project.summary()] if self.project is not None else []
         if self.localization is not None:
             project.append(self.localization.summary())
+        link = [f"  {text}"] if (text := self.link_text()) is not None else []
         return "\n".join(
             [
                 f"outcome after {self.time:.2f} s: {task2}",
@@ -111,6 +128,7 @@ class OutcomeReport:
                 f"  {self.messages} messages, {self.commands} commands, "
                 f"{self.busy_replies} busy (a drive still moving), {self.nan_replies} NaN "
                 f"replies; final pose x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg",
+                *link,
             ]
         )
 
@@ -187,6 +205,9 @@ class Outcome:
         outcome = cls(sim)
         sim.add_observer(outcome)
         return outcome
+
+    link_counts: Callable[[], dict[str, float]] | None = None
+    """What the run's link model did so far (set by the run that serves a link model)."""
 
     def _clear(self) -> None:
         self.first_motion: float | None = None
@@ -373,4 +394,5 @@ class Outcome:
             busy_replies=self.busy_replies,
             project=self.project_report(),
             localization=self.localization.report(),
+            link=None if self.link_counts is None else self.link_counts(),
         )
