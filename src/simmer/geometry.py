@@ -383,3 +383,76 @@ def robot_blocked(
     if polygon_hits_grid(scratch, hwall, vwall, solid, cell):
         return True
     return polygons_overlap(scratch, block)
+
+
+@_jit
+def cast_beam(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    see_block: bool,
+    ox: float,
+    oy: float,
+    angle_deg: float,
+    max_range: float,
+) -> float:
+    """Distance along one beam at ``angle_deg`` (a heading) to the first wall, or the block if
+    ``see_block``; inf if nothing is hit within ``max_range``. ``fallback`` (the wall segments)
+    is used only when the origin lies outside the grid."""
+    angle = math.radians(angle_deg)
+    dx = -math.sin(angle)
+    dy = math.cos(angle)
+    t = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, max_range)
+    if t < 0.0:
+        t = ray_segments(ox, oy, dx, dy, fallback)
+    if see_block:
+        t = min(t, ray_segments(ox, oy, dx, dy, block))
+    if t > max_range:
+        return math.inf
+    return t
+
+
+@_jit
+def cast_scan(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    see_block: bool,
+    poses: FloatArray,
+    mount: FloatArray,
+    directions: FloatArray,
+    max_range: float,
+    out: FloatArray,
+) -> None:
+    """Cast a LiDAR scan: beam k leaves the device mounted at ``mount`` (x, y, rotation in the
+    robot frame) on the robot at ``poses[k]`` (x, y, heading: each beam its own pose, so a
+    scan taken while the robot moves is smeared as a real one is), at ``directions[k]``
+    degrees from the device's front; ``out[k]`` is its distance (inf: no hit within
+    ``max_range``). The device's place is :meth:`~simmer.devices.base.Device.world_pose`'s
+    arithmetic."""
+    px = mount[0]
+    py = mount[1]
+    rotation = mount[2]
+    for k in range(out.shape[0]):
+        rh = poses[k, 2]
+        rad = math.radians(rh)
+        c = math.cos(rad)
+        s = math.sin(rad)
+        ox = poses[k, 0] + px * c - py * s
+        oy = poses[k, 1] + px * s + py * c
+        out[k] = cast_beam(
+            hwall,
+            vwall,
+            cell,
+            fallback,
+            block,
+            see_block,
+            ox,
+            oy,
+            (rh + rotation) + directions[k],
+            max_range,
+        )
