@@ -37,7 +37,7 @@ from pydantic import Field
 from simmer.devices.base import Circle, Color, Device, DeviceParams, Shape, Whole, World
 from simmer.devices.sensors import MeasuredParams
 from simmer.errors import CommandError
-from simmer.geometry import FloatArray, Vec2, cast_scan, rectangle
+from simmer.geometry import FloatArray, Vec2, rectangle, scan_revolution
 
 MAX_BEAMS = 999
 """Most beams per revolution: a whole scan is read in one message of a command per beam plus
@@ -127,6 +127,20 @@ class Lidar(Device):
         self._poses: list[tuple[float, float, float]] = []
         self._true = np.empty(n)
         self._beam_poses = np.empty((n, 3))
+        self._noise = np.zeros((3, n))
+        self._offsets = self.period * (np.arange(n) / n)
+        """When each beam is measured after its revolution starts, seconds."""
+        self._limits = np.array(
+            [
+                params.min_range,
+                params.max_range,
+                params.range_error,
+                params.range_error_proportional,
+                params.dropout,
+            ]
+        )
+        self._due = self.period - 1e-9
+        """When the revolution under way ends (a hair early: steps' times are sums)."""
         self._heading = 0.0
         """The heading of the latest pose recorded, as the robot has it (in [0, 360))."""
 
@@ -147,25 +161,26 @@ class Lidar(Device):
         """Keep the robot's pose now (its heading unwrapped from the last one's), and the
         first scan (at the start pose) if none is made yet."""
         pose = world.robot.pose
-        time = world.time
         if not self._times:
             start = world.robot.start_pose if world.time > 0.0 else pose
             self._times.append(0.0)
             self._poses.append((start.x, start.y, start.heading))
             self._heading = start.heading
             self._scan(world, 0.0, skew=False)
-        if time <= self._times[-1]:
+        if world.time <= self._times[-1]:
             return
         last = self._poses[-1][2]  # the heading within a half turn of the last (exact if 0)
-        heading = pose.heading + 360.0 * round((last - pose.heading) / 360.0)
-        self._times.append(time)
-        self._poses.append((pose.x, pose.y, heading))
+        self._times.append(world.time)
+        turns = round((last - pose.heading) / 360.0)
+        self._poses.append((pose.x, pose.y, pose.heading + 360.0 * turns))
         self._heading = pose.heading
 
     def update(self, world: World) -> None:
         """Record this step's pose; cast every scan whose revolution has ended."""
         self._record(world)
-        while world.time >= self.scan_time + self.period - 1e-9:
+        if world.time < self._due:
+            return
+        while world.time >= self._due:
             self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
         keep = 0  # drop the poses before the revolution under way (one before it stays)
         while keep + 1 < len(self._times) and self._times[keep + 1] <= self.scan_time:
@@ -177,62 +192,38 @@ class Lidar(Device):
         """Cast the revolution ending at ``end`` and draw its noise (see the module doc)."""
         s = self.settings
         n = s.beams
-        times = np.asarray(self._times)
-        poses = np.asarray(self._poses)
-        if skew:
-            beam_times = (end - self.period) + self.period * (np.arange(n) / n)
-        else:
-            beam_times = np.full(n, end)
-        for axis in range(2):
-            self._beam_poses[:, axis] = np.interp(beam_times, times, poses[:, axis])
-        # The heading as the latest pose's plus the turn since: exact while the robot is still
-        turns = poses[:, 2] - poses[-1, 2]
-        self._beam_poses[:, 2] = self._heading + np.interp(beam_times, times, turns)
-        directions = self.directions
+        noise = self._noise
         if s.angular_jitter:
-            directions = directions + self.rng.normal(0.0, s.angular_jitter, n)
+            noise[0] = self.rng.normal(0.0, s.angular_jitter, n)
+        if s.range_error or s.range_error_proportional:
+            noise[1] = self.rng.standard_normal(n)
+        if s.dropout:
+            noise[2] = self.rng.random(n)
+        beam_times = self._offsets + (end - self.period) if skew else np.full(n, end)
         maze = world.maze
-        true = self._true
-        cast_scan(
+        scan_revolution(
             maze.hwall,
             maze.vwall,
             maze.cell,
             maze.segments,
             world.block.segments,
             self.sees_block(world),
-            self._beam_poses,
+            np.array(self._times),
+            np.array(self._poses),
+            self._heading,
+            beam_times,
             self.mount,
-            directions,
-            s.max_range,
-            true,
+            self.directions,
+            self._limits,
+            noise,
+            self._beam_poses,
+            self._true,
+            self.distances,
+            self.points,
         )
-        distances = true.copy()
-        if s.range_error or s.range_error_proportional:
-            sd = s.range_error + s.range_error_proportional * np.where(np.isfinite(true), true, 0.0)
-            distances += sd * self.rng.normal(0.0, 1.0, n)
-        lost = ~np.isfinite(distances) | (distances < s.min_range) | (distances > s.max_range)
-        if s.dropout:
-            lost |= self.rng.random(n) < s.dropout
-        distances[lost] = 0.0
-        self.distances = distances
-        self._points(directions, lost)
         self.number += 1
         self.scan_time = end
-
-    def _points(self, directions: FloatArray, lost: np.ndarray) -> None:
-        """Where each beam's reading puts its point in the world (NaN where lost)."""
-        poses = self._beam_poses
-        rad = np.radians(poses[:, 2])
-        c, s = np.cos(rad), np.sin(rad)
-        px, py, rotation = self.mount
-        ox = poses[:, 0] + px * c - py * s
-        oy = poses[:, 1] + px * s + py * c
-        angle = np.radians(poses[:, 2] + rotation + directions)
-        points = np.column_stack(
-            (ox - np.sin(angle) * self.distances, oy + np.cos(angle) * self.distances)
-        )
-        points[lost] = math.nan
-        self.points = points
+        self._due = end + self.period - 1e-9
 
     # -- reading -------------------------------------------------------------------------
 

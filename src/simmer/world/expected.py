@@ -356,3 +356,61 @@ def table(
         if progress is not None:
             progress(row + 1, len(ys))
     return xs, ys, sensors, out
+
+
+def lidar_table(
+    sim: Simulation, step: float, sensor: str, progress: Callable[[int, int], None] | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """A LiDAR's scans on a grid, from the walls alone: (xs, ys, readings[y, x, beam]).
+
+    ``readings[y, x, k]`` is beam k of the noise-free scan of LiDAR ``sensor`` with its centre
+    at (x, y) and its front facing heading 0 (beam k along heading ``360 k / beams``; 0: no
+    return; NaN in solid cells). Positions are the LiDAR's own, not the robot's centre. A full
+    circle turned is the same circle, so this one heading is the whole table: the LiDAR at
+    (x, y) facing heading ``h`` (the robot's heading plus its ``rotation``) reads
+    ``np.roll(readings[y, x], -round(h * beams / 360))``, exactly when ``h`` is a whole
+    number of beams.
+    """
+    device = sim.robot.sensors.get(sensor)
+    if not isinstance(device, Lidar):
+        lidars = [i for i, d in sim.robot.sensors.items() if isinstance(d, Lidar)]
+        raise ValueError(
+            f"{sensor!r} is not a LiDAR on the robot; its LiDARs are: {', '.join(lidars) or 'none'}"
+        )
+    xs, ys = grid(sim, step)
+    s = device.settings
+    beams = s.beams
+    total = len(xs) * len(ys) * beams
+    if total > MAX_TABLE_VALUES:
+        raise ValueError(
+            f"{total:,} readings is over the limit of {MAX_TABLE_VALUES:,} (MAX_TABLE_VALUES); "
+            "use a larger --step"
+        )
+    out = np.full((len(ys), len(xs), beams), np.nan)
+    maze = sim.maze
+    cols = np.minimum((xs // maze.cell).astype(int), maze.cols - 1)
+    for row, y in enumerate(ys):
+        open_x = ~maze.solid[min(int(y // maze.cell), maze.rows - 1), cols]
+        if open_x.any():
+            poses = np.column_stack(
+                (xs[open_x], np.full(int(open_x.sum()), y), np.zeros(int(open_x.sum())))
+            )
+            scans = np.empty((poses.shape[0], beams))
+            _scans(
+                maze.hwall,
+                maze.vwall,
+                maze.cell,
+                maze.segments,
+                sim.block.segments,
+                False,
+                poses,
+                np.zeros(3),
+                device.directions,
+                s.min_range,
+                s.max_range,
+                scans,
+            )
+            out[row, open_x] = scans
+        if progress is not None:
+            progress(row + 1, len(ys))
+    return xs, ys, out
