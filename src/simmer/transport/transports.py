@@ -6,8 +6,10 @@ import ipaddress
 import logging
 
 from simmer.config.models import SimConfig
+from simmer.errors import SimmerError
 from simmer.options import RunOptions
 from simmer.transport.bus import ByteCounter, CommandBus
+from simmer.transport.rplidar_pty import RPLidarServer
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
 
@@ -59,6 +61,7 @@ class Transports:
             clock=clock,
         )
         self.serial: SerialServer | None = None
+        self.lidar: RPLidarServer | None = None
         try:
             self.stream = StreamServer(
                 bus,
@@ -75,6 +78,14 @@ class Transports:
                 self.serial = SerialServer(
                     bus, options.serial_link, codec=codec, timeout=settings.timeout, clock=clock
                 )
+            if options.lidar_serial:
+                lidars = [spec.id for spec in config.devices if spec.kind == "lidar"]
+                if not lidars:
+                    raise SimmerError(
+                        "--lidar-serial: the robot has no LiDAR; add a sensor with "
+                        'type = "lidar" to the configuration'
+                    )
+                self.lidar = RPLidarServer(bus, lidars[0], clock=clock)
         except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
             raise
@@ -85,6 +96,8 @@ class Transports:
         self.stream.start()
         if self.serial is not None:
             self.serial.start()
+        if self.lidar is not None:
+            self.lidar.start()
 
     def describe(self) -> list[str]:
         """One line per transport: where a control program connects."""
@@ -96,11 +109,17 @@ class Transports:
         if self.serial is not None:
             link = f" (link {self.serial.link})" if self.serial.link else ""
             lines.append(f"virtual serial port: {self.serial.path}{link}; replies {self.protocol}")
+        if self.lidar is not None:
+            lines.append(
+                f"virtual RPLidar:     {self.lidar.path} (LiDAR {self.lidar.device}, Slamtec's "
+                "protocol: RPLidar(port).iter_scans())"
+            )
         return lines
 
     def close(self) -> None:
         """Stop every transport."""
-        for server in (self.two_port, getattr(self, "stream", None), self.serial):
+        servers = (self.two_port, getattr(self, "stream", None), self.serial, self.lidar)
+        for server in servers:
             if server is not None:
                 server.close()
 
