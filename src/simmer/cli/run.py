@@ -296,11 +296,9 @@ def run(
     answer: Answer = None,
     record_limit: RecordLimit = 256,
 ) -> None:
-    """Run the simulator on CONFIG (default: the built-in lab maze and rover).
-
-    With --program, the run ends when the program exits (with its exit status), at --seconds
-    of simulated time (status 3) or at --timeout wall seconds (status 124).
-    """
+    """Run the simulator on CONFIG (default: the built-in lab maze and rover). With --program,
+    the run ends when the program exits (with its exit status), at --seconds of simulated time
+    (status 3) or at --timeout wall seconds (status 124)."""
     try:
         options = RunOptions.from_flags(
             headless=headless,

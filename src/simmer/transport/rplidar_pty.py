@@ -127,6 +127,7 @@ class RPLidarServer:
         self._last = 0
         """The number of the last scan seen (streamed or not)."""
         self._express_warned = False
+        self._overrun = False
         self._events = -1
         self._serving = threading.RLock()
         self._stopping = threading.Event()
@@ -246,6 +247,14 @@ class RPLidarServer:
             oldest = 1 if self._partial else 0  # what is half written goes out whole
             self._queued -= len(self._outbox[oldest])
             del self._outbox[oldest]
+            if not self._overrun:
+                self._overrun = True
+                log.warning(
+                    "%s: the program is not reading the scans; past %d KiB (MAX_BACKLOG) the "
+                    "oldest are dropped, as a real scanner's link overruns",
+                    self.client,
+                    MAX_BACKLOG // 1024,
+                )
 
     def _flush(self) -> None:
         while self._outbox:
