@@ -294,3 +294,17 @@ def test_the_table_at_heading_0_rotated_is_the_scan_at_every_heading(tmp_path: P
     )
     assert both.exit_code == 1
     assert "--sensor l0 only" in both.output
+
+
+def test_a_config_py_faking_a_lidar_with_a_ring_of_ultrasonics_still_loads() -> None:
+    from helpers import SIMMER_PY
+
+    sim = Simulation.from_config(SIMMER_PY / "lidar_ring" / "config.py")
+    ring = [f"{'abcd'[k // 10]}{k % 10}" for k in range(36)]
+    assert all(sim.robot.sensors[i].kind == "ultrasonic" for i in ring)
+    readings = sim.command(",".join(ring))
+    assert all(0 < r < 433 for r in readings)
+    # What docs/migrating.md says replaces it: a lidar with 36 beams at the ring's centre.
+    data = lidar_data(**QUIET, beams=36, min_range=0.0, height=5)
+    want = make_sim(data).expected(np.array([sim.robot.pose]), ["l0"])[0]
+    np.testing.assert_allclose(readings, want, atol=1e-9)
