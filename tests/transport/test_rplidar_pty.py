@@ -158,3 +158,15 @@ def test_a_program_started_by_hand_reads_it_in_real_time(tmp_path: Path) -> None
     numbers = matches(read, scans)
     assert len(numbers) == 4
     assert numbers == sorted(numbers)
+
+
+def test_lidar_serial_without_a_lidar_says_what_to_add() -> None:
+    from simmer.errors import SimmerError
+    from simmer.runner import Runner
+    from simmer.transport import Transports
+
+    sim = make_sim()
+    runner = Runner(sim)
+    with pytest.raises(SimmerError, match='type = "lidar"'):
+        Transports(runner.bus, sim.config, RunOptions.free_ports(lidar_serial=True))
+    runner.bus.close()
