@@ -59,6 +59,15 @@ def scan_microseconds(quiet: bool) -> float:
     return best(lambda: device._scan(sim, sim.time, skew=True), 2000) * 1e6
 
 
+def ultrasonic_ray_nanoseconds() -> float:
+    """One ray of the rover's front ultrasonic fan (7 rays, a read), for comparison: the
+    LiDAR's beams walk the same grid, so the two figures move together with the machine's
+    load."""
+    sim = rover(False)
+    device = sim.robot.devices["u0"]
+    return best(lambda: device.simulate(0.0, sim), 5000) * 1e9 / 7
+
+
 def steps_per_second(lidar: bool, count: int = 6000) -> float:
     """Steps a second of the rover driving back and forth, with or without its LiDAR."""
     sim = rover(lidar)
@@ -88,6 +97,11 @@ def main() -> dict[str, float]:
     """Measure and print every figure with its target."""
     figures = {"scan_us": scan_microseconds(quiet=True)}
     print(f"one 360-beam scan, noise off: {figures['scan_us']:.1f} us (target <= 30, stretch 10)")
+    ray = ultrasonic_ray_nanoseconds()
+    print(
+        f"  per beam {figures['scan_us'] * 1e3 / 360:.0f} ns; an ultrasonic read's ray, "
+        f"Python call included: {ray:.0f} ns"
+    )
     noisy = scan_microseconds(quiet=False)
     print(f"one 360-beam scan with the A1M8's noise drawn: {noisy:.1f} us")
     with_lidar, without = steps_per_second(True), steps_per_second(False)
