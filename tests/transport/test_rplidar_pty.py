@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import rplidar  # the test extra's: the package Raspberry Pi programs read the RPLidar with
 
 from link_support import run_program
 from simmer import Simulation
@@ -23,8 +24,6 @@ from simmer.transport.rplidar_pty import nodes
 from simmer.world.events import Event, StepEvent
 
 from helpers import default_data, make_sim, wait_for
-
-pytest.importorskip("rplidar")  # the test extra has it: pip install -e .[test]
 
 READER = """\
 import json, os, sys
@@ -93,11 +92,9 @@ def matches(read: list[list[float]], scans: dict[int, np.ndarray]) -> list[int]:
 
 
 def test_nodes_are_slamtecs_five_byte_measurements() -> None:
-    from rplidar import _process_scan
-
     raw = nodes(np.array([0.0, 90.5, 359.0]), np.array([10.0, 0.0, 472.0]))
     assert len(raw) == 15
-    decoded = [_process_scan(raw[i : i + 5]) for i in range(0, 15, 5)]
+    decoded = [rplidar._process_scan(raw[i : i + 5]) for i in range(0, 15, 5)]
     assert decoded[0] == (True, 15, 0.0, 254.0)
     assert decoded[1] == (False, 0, 90.5, 0.0)  # no return: quality 0, distance 0
     assert decoded[2] == (False, 15, 359.0, 11988.75)
