@@ -21,6 +21,7 @@ SUITES = [
     "bench_sweep",
     "bench_localization",
     "bench_limits",
+    "bench_lidar",
 ]
 
 

@@ -7,6 +7,7 @@ import socket
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from link_support import free_port, serving
@@ -93,3 +94,40 @@ def test_wait_idle_in_real_time_waits_on_the_simulator_without_busy_polls() -> N
     assert (report.busy_replies, report.nan_replies) == (0, 0)
     assert report.messages == 3  # w0-1, the one w0-0 that confirms the wait, and ours
     assert sim.robot.pose.y == pytest.approx(41.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("protocol", ["packed", "framed"])
+def test_a_lidar_scan_reads_whole_over_every_transport(protocol: str) -> None:
+    from helpers import default_data, make_sim
+
+    data = default_data() | {"protocol": protocol, "str_encoding": "ascii"}
+    quiet = {"range_error": 0, "range_error_proportional": 0, "angular_jitter": 0, "dropout": 0}
+    data["sensors"]["l0"] = {"type": "lidar", "position": [0, 0], "beams": 180} | quiet
+    sim = make_sim(data)
+    want = sim.expected([sim.robot.pose], ["l0"])[0]  # the robot stands still: every scan
+    framed = protocol == "framed"
+    with serving(sim, speed=None, serial=True) as (_, link):
+        assert link.serial is not None
+        clients = [
+            connect(
+                scheme="two-port",
+                port_rx=link.two_port.port_rx,
+                port_tx=link.two_port.port_tx,
+                framed=framed,
+            ),
+            connect(serial=link.serial.path, timeout=5, framed=framed),
+        ]
+        if not framed:
+            clients.append(connect(port=link.stream.port))
+        for client in clients:
+            with client:
+                first = client.scan("l0")
+                angles, distances = client.scan("l0")
+                assert first.number >= 1
+                np.testing.assert_array_equal(angles, np.arange(180) * 2.0)
+                # framed text: 3 decimals; packed: float32 (every transport here), exact to it
+                tolerance = 5e-4 if framed else 0.0
+                expect = want if framed else want.astype(np.float32)
+                np.testing.assert_allclose(distances, expect, rtol=0, atol=tolerance)
+                assert math.isnan(client.read("l0-400"))

@@ -22,7 +22,8 @@ import math
 import os
 import socket
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Literal, Protocol, runtime_checkable
@@ -50,6 +51,7 @@ __all__ = [
     "Client",
     "ClockLink",
     "Link",
+    "Scan",
     "Scheme",
     "SerialLink",
     "StreamLink",
@@ -350,6 +352,22 @@ class SerialLink:
         self._port.close()
 
 
+@dataclass(frozen=True)
+class Scan:
+    """A LiDAR's whole scan (:meth:`Client.scan`); unpacks as ``angles, distances``."""
+
+    angles: Any
+    """Each beam's angle, degrees clockwise from the LiDAR's front (a NumPy array)."""
+    distances: Any
+    """Each beam's distance, inches; 0 where the beam returned nothing (a NumPy array)."""
+    number: float
+    """The scan's number: it grows by one a revolution (NaN if the read failed)."""
+
+    def __iter__(self) -> Iterator[Any]:
+        """``angles, distances = robot.scan("l0")``."""
+        return iter((self.angles, self.distances))
+
+
 class Client:
     """A connection to the simulator or robot; use :func:`connect` to make one.
 
@@ -361,6 +379,7 @@ class Client:
     def __init__(self, link: Link, *, lockstep: bool = False) -> None:
         self.link = link
         self._clock = link if lockstep and isinstance(link, ClockLink) else None
+        self._beams: dict[str, int] = {}
         self.cut = 0
         """Points :meth:`show` cut to fit the bounds, in all."""
         self._cut_logged = -math.inf
@@ -387,6 +406,24 @@ class Client:
     def read(self, device_id: str) -> float:
         """Read one sensor (or motor odometer)."""
         return self.send(device_id)[0]
+
+    def scan(self, lidar_id: str = "l0") -> Scan:
+        """The latest whole scan of LiDAR ``lidar_id``: its beams' angles (degrees clockwise
+        from the LiDAR's front) and distances (inches, 0: no return) as NumPy arrays, and the
+        scan's number. Two messages the first time (``l0--1``: the beams a revolution), then
+        one: ``l0--2`` and a read per beam, all answered from one scan (docs/protocol.md)."""
+        import numpy as np
+
+        beams = self._beams.get(lidar_id)
+        if beams is None:
+            value = self.read(f"{lidar_id}--1")
+            if not (math.isfinite(value) and value >= 1 and value == int(value)):
+                raise ValueError(f"{lidar_id!r} answered {value!r} for its beams: not a LiDAR")
+            beams = self._beams[lidar_id] = int(value)
+        angles = np.arange(beams, dtype=np.float64) * (360.0 / beams)
+        message = ",".join([f"{lidar_id}--2", *(f"{lidar_id}-{a!r}" for a in angles.tolist())])
+        values = self.send(message)
+        return Scan(angles, np.asarray(values[1:], dtype=np.float64), values[0])
 
     def sleep(self, seconds: float) -> None:
         """Let ``seconds`` pass: simulated seconds in lockstep, else wall-clock ones."""

@@ -383,3 +383,110 @@ def robot_blocked(
     if polygon_hits_grid(scratch, hwall, vwall, solid, cell):
         return True
     return polygons_overlap(scratch, block)
+
+
+@_jit
+def cast_beam(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    see_block: bool,
+    ox: float,
+    oy: float,
+    angle_deg: float,
+    max_range: float,
+) -> float:
+    """Distance along one beam at ``angle_deg`` (a heading) to the first wall, or the block if
+    ``see_block``; inf if nothing is hit within ``max_range``. ``fallback`` (the wall segments)
+    is used only when the origin lies outside the grid."""
+    angle = math.radians(angle_deg)
+    dx = -math.sin(angle)
+    dy = math.cos(angle)
+    t = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, max_range)
+    if t < 0.0:
+        t = ray_segments(ox, oy, dx, dy, fallback)
+    if see_block:
+        t = min(t, ray_segments(ox, oy, dx, dy, block))
+    if t > max_range:
+        return math.inf
+    return t
+
+
+@_jit
+def scan_revolution(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    see_block: bool,
+    times: FloatArray,
+    poses: FloatArray,
+    heading_now: float,
+    beam_times: FloatArray,
+    mount: FloatArray,
+    directions: FloatArray,
+    limits: FloatArray,
+    noise: FloatArray,
+    beam_poses: FloatArray,
+    true: FloatArray,
+    distances: FloatArray,
+    points: FloatArray,
+) -> None:
+    """One LiDAR revolution, whole: each beam's robot pose at ``beam_times[k]`` interpolated
+    between the recorded ``times`` and ``poses`` (headings unwrapped; the heading is
+    ``heading_now`` plus the turn since the last pose, so it is exact while the robot stands
+    still), the beams cast (:func:`cast_beam`) from the device mounted at ``mount`` (x, y,
+    rotation in the robot frame, placed as :meth:`~simmer.devices.base.Device.world_pose`
+    places it), then the noise: ``noise`` rows are each beam's direction error (degrees), its
+    range error in standard deviations, and a uniform draw against the dropout chance.
+    ``limits``: min_range, max_range, range_error, range_error_proportional, dropout. Fills
+    ``beam_poses``, ``true`` (noise-free distance of the jittered beam, inf: no hit),
+    ``distances`` (0: no return) and ``points`` (where each beam met something, NaN where it
+    returned nothing)."""
+    n = true.shape[0]
+    m = times.shape[0]
+    last = poses[m - 1, 2]
+    j = 0
+    for k in range(n):
+        t = beam_times[k]
+        while j + 1 < m and times[j + 1] < t:
+            j += 1
+        if t <= times[0] or m == 1:
+            x, y, turn = poses[0, 0], poses[0, 1], poses[0, 2] - last
+        elif j + 1 >= m:
+            x, y, turn = poses[m - 1, 0], poses[m - 1, 1], 0.0
+        else:
+            f = (t - times[j]) / (times[j + 1] - times[j])
+            x = poses[j, 0] + f * (poses[j + 1, 0] - poses[j, 0])
+            y = poses[j, 1] + f * (poses[j + 1, 1] - poses[j, 1])
+            a = poses[j, 2] - last
+            turn = a + f * ((poses[j + 1, 2] - last) - a)
+        beam_poses[k, 0] = x
+        beam_poses[k, 1] = y
+        beam_poses[k, 2] = heading_now + turn
+    low, high, const, prop, dropout = limits[0], limits[1], limits[2], limits[3], limits[4]
+    px, py, rotation = mount[0], mount[1], mount[2]
+    for k in range(n):
+        rh = beam_poses[k, 2]
+        rad = math.radians(rh)
+        c = math.cos(rad)
+        s = math.sin(rad)
+        ox = beam_poses[k, 0] + px * c - py * s
+        oy = beam_poses[k, 1] + px * s + py * c
+        angle = (rh + rotation) + (directions[k] + noise[0, k])
+        d = cast_beam(hwall, vwall, cell, fallback, block, see_block, ox, oy, angle, high)
+        true[k] = d
+        if d != math.inf:
+            d = d + (const + prop * d) * noise[1, k]
+        if d == math.inf or d < low or d > high or noise[2, k] < dropout:
+            distances[k] = 0.0
+            points[k, 0] = math.nan
+            points[k, 1] = math.nan
+        else:
+            distances[k] = d
+            rad = math.radians(angle)
+            points[k, 0] = ox - math.sin(rad) * d
+            points[k, 1] = oy + math.cos(rad) * d

@@ -54,6 +54,8 @@ class RunOptions:
     ports: Ports = field(default_factory=Ports)
     serial: bool = False
     serial_link: Path | None = None
+    lidar_serial: bool = False
+    """Serve the robot's LiDAR as a virtual RPLidar on a pseudo-terminal."""
     window: bool = False
     speed: float | None = 1.0
     clock: Clock = "realtime"
@@ -86,6 +88,7 @@ class RunOptions:
         port: int | None = None,
         serial: bool = False,
         serial_link: Path | None = None,
+        lidar_serial: bool = False,
         link_delay: float | None = None,
         seconds: float | None = None,
         timeout: float | None = None,
@@ -118,6 +121,7 @@ class RunOptions:
             ports=Ports.from_flags(port_rx, port_tx, port, program=program is not None),
             serial=serial,
             serial_link=serial_link,
+            lidar_serial=lidar_serial,
             window=not headless,
             speed=pace,
             clock="lockstep" if lockstep else "realtime",

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from types import FrameType
 from typing import TYPE_CHECKING
 
+from simmer.devices.lidar import Lidar
 from simmer.ending import RunEnd
 from simmer.lockstep import (
     EXIT_SECONDS,
@@ -32,8 +33,9 @@ from simmer.record import RunRecorder
 from simmer.runner import Runner
 from simmer.transport import Transports
 from simmer.transport.link import Link, LinkModel
+from simmer.transport.rplidar_pty import RPLidarServer
 from simmer.world import Simulation
-from simmer.world.events import RunEvent
+from simmer.world.events import Event, Observer, RunEvent, StepEvent
 from simmer.world.outcome import Outcome
 
 if TYPE_CHECKING:
@@ -233,6 +235,8 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                 runner.bus, sim.config, options, clock=runner.clock, link_model=link_model
             )
             with transports:
+                if transports.lidar is not None:
+                    sim.add_observer(_feed_lidar(sim, transports.lidar))
                 if options.record is not None:
                     used = options.replace(
                         link_delay=runner.link_delay if options.lockstep else None
@@ -316,6 +320,19 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     return served
 
 
+def _feed_lidar(sim: Simulation, server: RPLidarServer) -> Observer:
+    """An observer giving the virtual RPLidar each new scan of its LiDAR after a step, in the
+    loop thread that owns the simulation (it reads the scan; it commands nothing)."""
+
+    def feed(event: Event) -> None:
+        if isinstance(event, StepEvent):
+            device = sim.robot.devices.get(server.device)
+            if isinstance(device, Lidar):
+                server.scan(device.number, device.directions, device.distances)
+
+    return feed
+
+
 def _say(echo: Callable[[str], None]) -> Callable[[str], None]:
     """Say a recording stopped, in the log and where the run's messages go."""
 
@@ -361,6 +378,8 @@ def _start_program(
     env = program_environment(ports, transports.host, configured=configured)
     if transports.serial is not None:
         env["SIMMER_SERIAL"] = str(transports.serial.link or transports.serial.path)
+    if transports.lidar is not None:
+        env["SIMMER_LIDAR_SERIAL"] = transports.lidar.path
     assert options.program is not None
     command, timeout = options.program, options.timeout
     output = options.program_output

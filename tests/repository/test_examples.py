@@ -121,3 +121,18 @@ def test_cli_run_headless_serves_until_the_time_limit() -> None:
     assert "replies in SimMeR v1.2 framed text" in framed.output
     bad = CliRunner().invoke(app, ["run", "--headless", "--speed", "fast"])
     assert bad.exit_code != 0
+
+
+@pytest.mark.slow
+def test_the_lidar_localization_example_localizes_from_the_start() -> None:
+    """lidar_localization.py on lidar_rover.toml, as its docstring runs it: the particles,
+    weighed by scans against the LiDAR's table, find the robot and keep it to the end."""
+    config = EXAMPLES / "lidar_rover.toml"
+    sim = Simulation.from_config(config)
+    outcome = Outcome.attach(sim)
+    program = f"{sys.executable} {EXAMPLES / 'lidar_localization.py'} {config} --no-show"
+    assert run_program(sim, program).exit_status == 0
+    report = outcome.report().localization
+    assert report is not None
+    assert report.localized_at is not None
+    assert report.localized_at < 5.0  # 0.38 s: the first scan, from the start cell

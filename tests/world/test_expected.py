@@ -35,7 +35,7 @@ def test_expected_equals_the_sensors_noise_free_readings_at_1000_random_poses() 
     sim = quiet_default()
     kinds = {d.id: type(d).kind for d in sim.robot.sensors.values()}
     ids = [i for i, kind in kinds.items() if kind in SUPPORTED]
-    assert {kinds[i] for i in ids} == set(SUPPORTED)
+    assert {kinds[i] for i in ids} == set(SUPPORTED) - {"lidar"}  # tests/devices/test_lidar.py
     rng = np.random.default_rng(22)
     poses = np.column_stack(
         (

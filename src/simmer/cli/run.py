@@ -122,6 +122,14 @@ Serial = Annotated[
     bool,
     typer.Option("--serial", help="Also serve a virtual serial port (a pseudo-terminal)."),
 ]
+LidarSerial = Annotated[
+    bool,
+    typer.Option(
+        "--lidar-serial",
+        help="Also serve the robot's LiDAR as a virtual RPLidar (Slamtec's serial protocol) "
+        "on a pseudo-terminal.",
+    ),
+]
 SerialLink = Annotated[
     Path | None,
     typer.Option(help="Make a stable link to the serial port at this path.", metavar="PATH"),
@@ -272,6 +280,7 @@ def run(
     port: Port = None,
     serial: Serial = False,
     serial_link: SerialLink = None,
+    lidar_serial: LidarSerial = False,
     protocol: ProtocolFlag = None,
     reply_bytes: ReplyBytes = None,
     program: ProgramFlag = None,
@@ -287,11 +296,9 @@ def run(
     answer: Answer = None,
     record_limit: RecordLimit = 256,
 ) -> None:
-    """Run the simulator on CONFIG (default: the built-in lab maze and rover).
-
-    With --program, the run ends when the program exits (with its exit status), at --seconds
-    of simulated time (status 3) or at --timeout wall seconds (status 124).
-    """
+    """Run the simulator on CONFIG (default: the built-in lab maze and rover). With --program,
+    the run ends when the program exits (with its exit status), at --seconds of simulated time
+    (status 3) or at --timeout wall seconds (status 124)."""
     try:
         options = RunOptions.from_flags(
             headless=headless,
@@ -304,6 +311,7 @@ def run(
             port=port,
             serial=serial,
             serial_link=serial_link,
+            lidar_serial=lidar_serial,
             link_delay=link_delay,
             seconds=seconds,
             timeout=timeout,

@@ -37,20 +37,36 @@ def table(
 ) -> None:
     """Write the readings each sensor gives with its noise off at every position (every STEP
     inches, half a step from the walls' lines) and heading, from the walls alone (no block):
-    ultrasonic, infrared and compass sensors, with the simulator's own geometry."""
+    ultrasonic, infrared and compass sensors, with the simulator's own geometry. A LiDAR
+    (--sensor l0, alone): its scans at heading 0, which every heading rotates."""
     from rich.progress import Progress
 
-    from simmer.localize.files import write_table
+    from simmer.localize.files import lidar_table, write_table
     from simmer.world.expected import parse_headings
 
     sim = simulation(config)
+    lidars = [i for i in sensor or [] if getattr(sim.robot.sensors.get(i), "kind", "") == "lidar"]
     try:
+        if lidars and len(sensor or []) > 1:
+            raise ValueError(
+                f"a LiDAR's table is written alone: give --sensor {lidars[0]} only (its scans "
+                "at heading 0; every other heading is one rotated)"
+            )
         angles = parse_headings(headings)
         with Progress(console=err, transient=True) as progress:
             task = progress.add_task("casting rays", total=None)
             done = lambda row, rows: progress.update(task, completed=row, total=rows)  # noqa: E731
-            count, ids = write_table(sim, output, step, angles, sensor, done)
+            if lidars:
+                count, ids = lidar_table(sim, step, lidars[0], output, done), lidars
+            else:
+                count, ids = write_table(sim, output, step, angles, sensor, done)
     except (ValueError, OSError) as exc:
         err.print(f"cannot write the table: {exc}", style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(f"wrote {output}: {count:,} readings of {', '.join(ids)}", markup=False)
+    if lidars:
+        out.print(
+            "a LiDAR's table is its scans facing heading 0 (--headings is not used): facing "
+            "heading h it reads the same scan rotated by h (docs/localization.md)",
+            markup=False,
+        )

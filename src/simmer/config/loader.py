@@ -219,6 +219,10 @@ def _link(config: SimConfig) -> str:
     )
 
 
+LIDAR_NOISE = ("range_error", "range_error_proportional", "angular_jitter", "dropout")
+"""A LiDAR's noise settings (:mod:`simmer.devices.lidar`), each counted as ``error`` is."""
+
+
 def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
     """The devices with noise switched on, and which of their settings (``error``, ``bias``)
     are not zero; drive biases drawn at start (``rand_bias``) count as each drive's bias."""
@@ -226,7 +230,7 @@ def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
     drawn = settings.rand_bias and any(settings.bias_strength)
     found: dict[str, list[str]] = {}
     for spec in config.devices:
-        for name in ("error", "bias"):
+        for name in ("error", "bias", *LIDAR_NOISE):
             value = getattr(spec.params, name, 0.0)
             values = value.model_dump().values() if isinstance(value, BaseModel) else [value]
             if any(v != 0 for v in values) or (drawn and name == "bias" and spec.group == "drives"):

@@ -14,6 +14,7 @@ from simmer.devices.base import (
     World,
 )
 from simmer.devices.drive import Axes, Drive, DriveParams, Motion
+from simmer.devices.lidar import Lidar, LidarParams
 from simmer.devices.motor import Motor, MotorParams
 from simmer.devices.registry import (
     DeviceKinds,
@@ -49,6 +50,8 @@ __all__ = [
     "GyroscopeParams",
     "Infrared",
     "InfraredParams",
+    "Lidar",
+    "LidarParams",
     "Motion",
     "Motor",
     "MotorParams",

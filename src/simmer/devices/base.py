@@ -148,6 +148,8 @@ class RobotView(Protocol):
     """The robot as a device sees it (:class:`simmer.world.robot.Robot` is one)."""
 
     pose: Pose
+    start_pose: Pose
+    """Where the robot started (a LiDAR's first scan is made there)."""
     turned: float
     """Degrees turned during the last step (what a gyroscope senses)."""
     height: float

@@ -11,6 +11,7 @@ import numpy as np
 
 from simmer.geometry import FloatArray
 from simmer.localize.mapdata import map_data
+from simmer.world.expected import lidar_table as lidar_readings
 from simmer.world.expected import table
 from simmer.world.simulation import Simulation
 
@@ -60,3 +61,41 @@ def write_table(
             file.write(",".join(["x", "y", "heading", *ids]) + "\n")
             np.savetxt(file, rows, fmt="%.6g", delimiter=",")
     return int(readings.size), ids
+
+
+def lidar_table(
+    sim: Simulation,
+    step: float,
+    sensor: str,
+    path: Path | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> int:
+    """Compute a LiDAR's table (:func:`~simmer.world.expected.lidar_table`), write it if
+    ``path`` is given, and say how many readings it holds.
+
+    ``.npz``: ``readings[y, x, beam]`` (float32), ``x``, ``y``, ``angles`` (each beam's
+    heading, degrees), ``sensors`` (the LiDAR's id), ``step``. ``.csv``: a row per open
+    position, ``x,y,`` then a column per beam (``b0``, ``b1``...).
+    """
+    if path is not None and path.suffix not in TABLE_SUFFIXES:
+        raise ValueError(f"{path}: a table is written as .npz or .csv, not {path.suffix!r}")
+    xs, ys, readings = lidar_readings(sim, step, sensor, progress)
+    angles = np.arange(readings.shape[2], dtype=np.float64) * (360.0 / readings.shape[2])
+    if path is not None and path.suffix == ".npz":
+        np.savez(
+            path,
+            readings=readings.astype(np.float32),
+            x=xs,
+            y=ys,
+            angles=angles,
+            sensors=np.array([sensor]),
+            step=step,
+        )
+    elif path is not None:
+        gy, gx = np.meshgrid(ys, xs, indexing="ij")
+        rows = np.column_stack((gx.ravel(), gy.ravel(), readings.reshape(-1, len(angles))))
+        rows = rows[~np.isnan(rows[:, 2:]).any(axis=1)]
+        with path.open("w", encoding="utf-8") as file:
+            file.write(",".join(["x", "y", *(f"b{k}" for k in range(len(angles)))]) + "\n")
+            np.savetxt(file, rows, fmt="%.6g", delimiter=",")
+    return int(readings.size)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from simmer.config.maze import robot_outline
+from simmer.devices.lidar import Lidar
 from simmer.devices.sensors import Infrared, Ultrasonic
 
 if TYPE_CHECKING:
@@ -42,6 +43,15 @@ def device_mount(device: Device, sim: Simulation) -> dict[str, Any]:
             min_range=s.min_range,
             max_range=s.max_range,
             num_rays=s.num_rays,
+        )
+    elif isinstance(device, Lidar):
+        scanner = device.settings
+        mount.update(
+            height=device.height(sim),
+            beams=scanner.beams,
+            scan_rate=scanner.scan_rate,
+            min_range=scanner.min_range,
+            max_range=scanner.max_range,
         )
     elif isinstance(device, Infrared):
         floor = device.settings

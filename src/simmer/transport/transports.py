@@ -6,9 +6,11 @@ import ipaddress
 import logging
 
 from simmer.config.models import SimConfig
+from simmer.errors import SimmerError
 from simmer.options import RunOptions
 from simmer.transport.bus import ByteCounter, CommandBus
 from simmer.transport.link import Link
+from simmer.transport.rplidar_pty import RPLidarServer
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
 
@@ -64,6 +66,7 @@ class Transports:
             link_model=link_model,
         )
         self.serial: SerialServer | None = None
+        self.lidar: RPLidarServer | None = None
         try:
             self.stream = StreamServer(
                 bus,
@@ -86,6 +89,14 @@ class Transports:
                     clock=clock,
                     link_model=link_model,
                 )
+            if options.lidar_serial:
+                lidars = [spec.id for spec in config.devices if spec.kind == "lidar"]
+                if not lidars:
+                    raise SimmerError(
+                        "--lidar-serial: the robot has no LiDAR; add a sensor with "
+                        'type = "lidar" to the configuration'
+                    )
+                self.lidar = RPLidarServer(bus, lidars[0], clock=clock)
         except BaseException:  # a port in use, a serial link refused, Ctrl-C: undo the rest
             self.close()
             raise
@@ -96,6 +107,8 @@ class Transports:
         self.stream.start()
         if self.serial is not None:
             self.serial.start()
+        if self.lidar is not None:
+            self.lidar.start()
 
     def describe(self) -> list[str]:
         """One line per transport: where a control program connects."""
@@ -119,11 +132,17 @@ class Transports:
                 f"+ up to {p.jitter * 1000:g} ms, loss {p.loss:g} and corruption "
                 f"{p.corruption:g} a byte, {drops} (docs/link.md)"
             )
+        if self.lidar is not None:
+            lines.append(
+                f"virtual RPLidar:     {self.lidar.path} (LiDAR {self.lidar.device}, Slamtec's "
+                "protocol: RPLidar(port).iter_scans())"
+            )
         return lines
 
     def close(self) -> None:
         """Stop every transport."""
-        for server in (self.two_port, getattr(self, "stream", None), self.serial):
+        servers = (self.two_port, getattr(self, "stream", None), self.serial, self.lidar)
+        for server in servers:
             if server is not None:
                 server.close()
 

@@ -16,14 +16,22 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
+from simmer.devices.lidar import Lidar
 from simmer.devices.sensors import _DISK, Compass, Infrared, Ultrasonic
-from simmer.geometry import BoolArray, FloatArray, cast_fan, white_fraction, wrap_degrees
+from simmer.geometry import (
+    BoolArray,
+    FloatArray,
+    cast_beam,
+    cast_fan,
+    white_fraction,
+    wrap_degrees,
+)
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
 
-SUPPORTED = ("ultrasonic", "infrared", "compass")
-"""Sensor kinds :func:`expected` answers for."""
+SUPPORTED = ("ultrasonic", "infrared", "compass", "lidar")
+"""Sensor kinds :func:`expected` answers for (a LiDAR only when named: a column per beam)."""
 
 
 @numba.njit(cache=True, nogil=True, parallel=True)
@@ -95,6 +103,49 @@ def _floors(
         out[i] = 1.0 if fraction >= threshold else 0.0
 
 
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _scans(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    fallback: FloatArray,
+    block: FloatArray,
+    see_block: bool,
+    poses: FloatArray,
+    mount: FloatArray,
+    directions: FloatArray,
+    low: float,
+    high: float,
+    out: FloatArray,
+) -> None:
+    """Fill ``out[i, k]`` with a LiDAR's noise-free beam k at robot pose ``poses[i]`` (0: no
+    return). ``mount``: x, y, rotation; the arithmetic is
+    :func:`~simmer.geometry.cast_scan`'s, beam by beam, so the readings are the device's own
+    to the last bit."""
+    px, py, rotation = mount[0], mount[1], mount[2]
+    for i in numba.prange(poses.shape[0]):
+        rh = poses[i, 2]
+        rad = math.radians(rh)
+        c = math.cos(rad)
+        s = math.sin(rad)
+        ox = poses[i, 0] + px * c - py * s
+        oy = poses[i, 1] + px * s + py * c
+        for k in range(directions.shape[0]):
+            d = cast_beam(
+                hwall,
+                vwall,
+                cell,
+                fallback,
+                block,
+                see_block,
+                ox,
+                oy,
+                (rh + rotation) + directions[k],
+                high,
+            )
+            out[i, k] = 0.0 if (d == math.inf or d < low or d > high) else d
+
+
 def _as_poses(poses: Any) -> FloatArray:
     array = np.ascontiguousarray(poses, dtype=np.float64)
     if array.ndim == 1 and array.shape[0] == 3:
@@ -117,20 +168,53 @@ def expected(
 
     ``poses``: (N, 3) x, y, heading (inches, degrees from +y) of the robot. Returns (N, S), one
     column per sensor in the order asked. ``block``: the block, where it is now, is seen by the
-    ultrasonic sensors as in the simulation (False: the walls alone, as for a table made before
-    anyone knows where the block is). A pose inside a wall is not refused: its rays start there.
+    ultrasonic sensors and LiDARs as in the simulation (False: the walls alone, as for a table
+    made before anyone knows where the block is). A pose inside a wall is not refused: its rays
+    start there. A LiDAR, when named (the default leaves it out), gives one column per beam,
+    beam 0 first: its scan with its noise off and the robot standing still (0: no return).
     """
     array = _as_poses(poses)
     devices = sim.robot.sensors
     if sensors is None:
         sensors = [i for i, d in devices.items() if isinstance(d, Ultrasonic | Infrared | Compass)]
-    out = np.empty((array.shape[0], len(sensors)), dtype=np.float64)
-    for column, sensor_id in enumerate(sensors):
+    found = []
+    for sensor_id in sensors:
         device = devices.get(sensor_id)
         if device is None:
             known = ", ".join(devices) or "none"
             raise ValueError(f"no sensor {sensor_id!r} on the robot; the sensors are: {known}")
-        out[:, column] = _column(sim, device, array, block)
+        found.append(device)
+    widths = [d.settings.beams if isinstance(d, Lidar) else 1 for d in found]
+    out = np.empty((array.shape[0], sum(widths)), dtype=np.float64)
+    column = 0
+    for device, width in zip(found, widths, strict=True):
+        if isinstance(device, Lidar):
+            out[:, column : column + width] = _lidar(sim, device, array, block)
+        else:
+            out[:, column] = _column(sim, device, array, block)
+        column += width
+    return out
+
+
+def _lidar(sim: Simulation, device: Lidar, poses: FloatArray, block: bool) -> FloatArray:
+    """A LiDAR's noise-free scans at ``poses``: (N, beams)."""
+    s = device.settings
+    maze, cube = sim.maze, sim.block
+    out = np.empty((poses.shape[0], s.beams), dtype=np.float64)
+    _scans(
+        maze.hwall,
+        maze.vwall,
+        maze.cell,
+        maze.segments,
+        cube.segments,
+        block and device.sees_block(sim),
+        poses,
+        device.mount,
+        device.directions,
+        s.min_range,
+        s.max_range,
+        out,
+    )
     return out
 
 
@@ -272,3 +356,61 @@ def table(
         if progress is not None:
             progress(row + 1, len(ys))
     return xs, ys, sensors, out
+
+
+def lidar_table(
+    sim: Simulation, step: float, sensor: str, progress: Callable[[int, int], None] | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """A LiDAR's scans on a grid, from the walls alone: (xs, ys, readings[y, x, beam]).
+
+    ``readings[y, x, k]`` is beam k of the noise-free scan of LiDAR ``sensor`` with its centre
+    at (x, y) and its front facing heading 0 (beam k along heading ``360 k / beams``; 0: no
+    return; NaN in solid cells). Positions are the LiDAR's own, not the robot's centre. A full
+    circle turned is the same circle, so this one heading is the whole table: the LiDAR at
+    (x, y) facing heading ``h`` (the robot's heading plus its ``rotation``) reads
+    ``np.roll(readings[y, x], -round(h * beams / 360))``, exactly when ``h`` is a whole
+    number of beams.
+    """
+    device = sim.robot.sensors.get(sensor)
+    if not isinstance(device, Lidar):
+        lidars = [i for i, d in sim.robot.sensors.items() if isinstance(d, Lidar)]
+        raise ValueError(
+            f"{sensor!r} is not a LiDAR on the robot; its LiDARs are: {', '.join(lidars) or 'none'}"
+        )
+    xs, ys = grid(sim, step)
+    s = device.settings
+    beams = s.beams
+    total = len(xs) * len(ys) * beams
+    if total > MAX_TABLE_VALUES:
+        raise ValueError(
+            f"{total:,} readings is over the limit of {MAX_TABLE_VALUES:,} (MAX_TABLE_VALUES); "
+            "use a larger --step"
+        )
+    out = np.full((len(ys), len(xs), beams), np.nan)
+    maze = sim.maze
+    cols = np.minimum((xs // maze.cell).astype(int), maze.cols - 1)
+    for row, y in enumerate(ys):
+        open_x = ~maze.solid[min(int(y // maze.cell), maze.rows - 1), cols]
+        if open_x.any():
+            poses = np.column_stack(
+                (xs[open_x], np.full(int(open_x.sum()), y), np.zeros(int(open_x.sum())))
+            )
+            scans = np.empty((poses.shape[0], beams))
+            _scans(
+                maze.hwall,
+                maze.vwall,
+                maze.cell,
+                maze.segments,
+                sim.block.segments,
+                False,
+                poses,
+                np.zeros(3),
+                device.directions,
+                s.min_range,
+                s.max_range,
+                scans,
+            )
+            out[row, open_x] = scans
+        if progress is not None:
+            progress(row + 1, len(ys))
+    return xs, ys, out

@@ -503,6 +503,14 @@ class Simulation:
 
         return expected(self, poses, sensors, block=block)
 
+    def lidar_table(self, step: float, sensor: str) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """LiDAR ``sensor``'s noise-free scans from the walls alone, its centre every ``step``
+        inches, facing heading 0: (xs, ys, readings[y, x, beam]); facing heading h it reads
+        the same scan rotated (``np.roll(scan, -round(h * beams / 360))``)."""
+        from simmer.world.expected import lidar_table
+
+        return lidar_table(self, step, sensor)
+
     def add_observer(self, observer: Observer) -> None:
         """Call ``observer(event)`` for every event of the run (see :mod:`simmer.world.events`)."""
         self.observers.append(observer)

@@ -71,9 +71,16 @@ try:
     import termios
 
     _FIONREAD: int | None = termios.FIONREAD
+    _MODEM_LINES = {
+        getattr(termios, name)
+        for name in ("TIOCMBIS", "TIOCMBIC", "TIOCMSET", "TIOCMGET")
+        if hasattr(termios, name)
+    }
+    """The modem-control ioctls, which a pseudo-terminal refuses (the virtual RPLidar's)."""
 except ImportError:  # Windows: no byte counts, no waiting for them
     fcntl = None  # type: ignore[assignment]
     _FIONREAD = None
+    _MODEM_LINES = set()
 
 _HEADER = struct.Struct("<BH")
 MAX_SLEEP = 1e9
@@ -87,6 +94,12 @@ byte arrived, every other thread back in a wait). A thread that never waits (it 
 blocks on something else than the simulator) would otherwise hold every sleep; past this the
 clock goes on without it, said once, and it is not waited for again."""
 _LOCAL = {"127.0.0.1", "localhost", "::1"}
+_SCANNERS: set[int] = set()
+"""The program's descriptors of the virtual RPLidar (``SIMMER_LIDAR_SERIAL``)."""
+SCANNER_STEP = 0.01
+"""Simulated seconds a timed wait on the virtual RPLidar takes at a time: a scanner sends
+unasked, so the wait ends within this of its data coming (a whole timeout at once would let
+several scans pile up, which the ``rplidar`` package then throws away)."""
 _REAL_SLEEP = time.sleep
 _REAL_IOCTL = fcntl.ioctl if fcntl is not None else None
 _REAL_SELECT = select.select
@@ -382,11 +395,14 @@ class _Program:
             total += _inq(fd)
         return total
 
-    def poll(self, ready: Callable[[], bool], timeout: float | None) -> bool:
+    def poll(
+        self, ready: Callable[[], bool], timeout: float | None, step: float | None = None
+    ) -> bool:
         """A poll for the simulator's bytes (see the module doc): sync, wait for every byte
         sent to arrive, and if nothing is ready wait ``timeout`` simulated seconds (None:
-        not at all, the caller blocks); a zero timeout counts as a clock read. Whether
-        anything is ready."""
+        not at all, the caller blocks); a zero timeout counts as a clock read. With ``step``
+        the wait is taken ``step`` seconds at a time and ends once something is ready (the
+        virtual RPLidar's stream, which a device sends unasked). Whether anything is ready."""
         before = self.now
         message = "!time +" if timeout == 0 else "!peek +"
         _now, sent, _owed = self.ask(message)
@@ -396,10 +412,15 @@ class _Program:
         if timeout is None:
             return False
         if timeout > 0:
-            self.sleep(min(float(timeout), MAX_SLEEP))
-            _now, sent, _owed = self.ask("!peek +")
-            self.wait_arrived(int(sent))
-            return ready()
+            left = min(float(timeout), MAX_SLEEP)
+            while left > 0:
+                self.sleep(left if step is None else min(step, left))
+                left = 0.0 if step is None else left - step
+                _now, sent, _owed = self.ask("!peek +")
+                self.wait_arrived(int(sent))
+                if ready():
+                    return True
+            return False
         self.moved(self.now > before)
         return False
 
@@ -641,8 +662,11 @@ def _install(address: str) -> None:
         program,
         lambda fd: fd in program.fds or any(s.fileno() == fd for s in list(program.sockets)),
     )
-    if os.environ.get("SIMMER_SERIAL"):
-        _count_serial(os.path.realpath(os.environ["SIMMER_SERIAL"]), written, program)
+    serials = [os.environ.get(name, "") for name in ("SIMMER_SERIAL", "SIMMER_LIDAR_SERIAL")]
+    if any(serials):
+        lidar = os.path.realpath(serials[1]) if serials[1] else None
+        devices = {os.path.realpath(path) for path in serials if path}
+        _count_serial(devices, written, program, lidar)
 
 
 def _fd(item: Any) -> int:
@@ -664,7 +688,8 @@ def _patch_select(program: _Program, ours: Callable[[int], bool]) -> None:
         def ready() -> bool:
             return any(_REAL_SELECT(rlist, wlist, xlist, 0))
 
-        if program.poll(ready, None if timeout is None else max(float(timeout), 0.0)):
+        step = SCANNER_STEP if any(_fd(item) in _SCANNERS for item in rlist) else None
+        if program.poll(ready, None if timeout is None else max(float(timeout), 0.0), step):
             return _REAL_SELECT(rlist, wlist, xlist, 0)
         if timeout is None:
             with program.waiting():
@@ -753,17 +778,25 @@ def _patch_selector(cls: Any, program: _Program, ours: Callable[[int], bool]) ->
     cls.select = select_
 
 
-def _count_serial(device: str, written: _Written, program: _Program) -> None:
-    """Count what the program writes to the virtual serial port ``device`` (pyserial opens it
-    with ``os.open`` and writes with ``os.write``) and reads from it, and make ``in_waiting``
-    (``ioctl TIOCINQ``) a poll."""
+def _count_serial(
+    devices: set[str], written: _Written, program: _Program, lidar: str | None = None
+) -> None:
+    """Count what the program writes to the virtual serial ports ``devices`` (pyserial opens
+    them with ``os.open`` and writes with ``os.write``) and reads from them, and make
+    ``in_waiting`` (``ioctl TIOCINQ``) a poll. On the virtual RPLidar (``lidar``) the motor
+    line's ioctls (pyserial's ``setDTR``, ``setRTS``), which a pseudo-terminal refuses, do
+    nothing, as the scanner's motor follows its ``SET_PWM`` command there."""
     real_open, real_write, real_read, real_close = os.open, os.write, os.read, os.close
     serial = program.fds
 
     def open_(path: Any, flags: int, *args: Any, **kwargs: Any) -> int:
         fd = real_open(path, flags, *args, **kwargs)
-        if isinstance(path, (str, bytes, os.PathLike)) and os.path.realpath(path) == device:
-            serial.add(fd)
+        if isinstance(path, (str, bytes, os.PathLike)):
+            where = os.path.realpath(path)
+            if where in devices:
+                serial.add(fd)
+            if where == lidar:
+                _SCANNERS.add(fd)
         return fd
 
     def write(fd: int, data: Any) -> int:
@@ -784,11 +817,17 @@ def _count_serial(device: str, written: _Written, program: _Program) -> None:
         if fd in serial:
             program.got(_inq(fd))
             serial.discard(fd)
+        _SCANNERS.discard(fd)
         real_close(fd)
 
     def ioctl(fd: Any, request: int, *args: Any) -> Any:
         if request == _FIONREAD and _fd(fd) in serial:
-            program.poll(lambda: _inq(_fd(fd)) > 0, 0)
+            waiting = lambda: _inq(_fd(fd)) > 0  # noqa: E731
+            # On the scanner, a look that finds its stream is no busy-wait's clock read
+            if _fd(fd) not in _SCANNERS or not program.poll(waiting, None):
+                program.poll(waiting, 0)
+        if request in _MODEM_LINES and _fd(fd) in _SCANNERS:
+            return args[0] if args else 0
         return _REAL_IOCTL(fd, request, *args)
 
     os.open = open_
