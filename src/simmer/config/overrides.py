@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from simmer.config.mazes import from_walls
 from simmer.config.models import SimConfig
 from simmer.config.validate import config_from_dict
 
@@ -69,8 +70,18 @@ def with_overrides(
 
 def _config_data(config: SimConfig) -> dict[str, Any]:
     """A validated configuration as data again: every setting, and each device's settings as
-    given (a device's unset settings keep their defaults, as in its file)."""
+    given (a device's unset settings keep their defaults, as in its file); the settings its
+    ``maze`` supplied are left to it."""
     data = config.settings.model_dump()
+    if config.settings.maze is not None:  # the maze supplies them again (a sweep's maze.seed)
+        s = config.settings
+        places = from_walls(s.walls, cell=s.wall_segment_length, start=s.zones.start).places()
+        for key, value in places.items():
+            if list(getattr(s, key)) == value:
+                del data[key]
+        for key in ("walls", "wall_segment_length", "floor_segment_length", "floor_seed"):
+            del data[key]
+        data["zones"].update(loading=None, dropoff=None, start=None)
     for spec in config.devices:
         params = spec.params.model_dump(exclude_unset=True)
         data.setdefault(spec.group, {})[spec.id] = {**params, "type": spec.kind}
