@@ -309,3 +309,24 @@ def robot_items(
         Outline(body, None, edge, 2.0, ROBOT, dashed),
         Arrow((start[0], start[1]), (end[0], end[1]), edge, 2.0, ROBOT),
     ]
+
+
+ALIKE_COLORS: tuple[Color, ...] = ((46, 160, 67), (255, 200, 40), (245, 130, 30), (215, 40, 40))
+"""An ambiguity map's tints: no look-alike, 1, 2, 3 or more."""
+
+
+def ambiguity_items(alike: np.ndarray, cell: float) -> list[Item]:
+    """An ambiguity map: each open cell tinted by how many other cells look like it to the
+    robot's sensors (``alike[row, col]``, -1 on solid cells), its count written in it."""
+    items: list[Item] = []
+    for shade, color in enumerate(ALIKE_COLORS):
+        chosen = alike >= shade if shade == len(ALIKE_COLORS) - 1 else alike == shade
+        rects = tuple(
+            (c * cell, r * cell, cell, cell) for r, c in zip(*np.nonzero(chosen), strict=True)
+        )
+        if rects:
+            items.append(Cells(rects, color, 0.55, ZONE))
+    for r, c in zip(*np.nonzero(alike >= 0), strict=True):
+        at = (float(c + 0.38) * cell, float(r + 0.3) * cell)
+        items.append(Label(str(int(alike[r, c])), at, (0, 0, 0), 10, ZONE_NAME))
+    return items

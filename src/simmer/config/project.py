@@ -123,8 +123,9 @@ Range = tuple[float, float]
 
 
 class GenerateSettings(BaseModel):
-    """The knobs of the maze generator: a configuration's ``[maze]`` table, or the flags of
-    ``simmer maze generate``."""
+    """The maze generator's knobs: a configuration's `[maze]` table, `simmer maze generate`'s flags.
+
+    See :mod:`simmer.config.mazegen` for what each does."""
 
     model_config = SETTINGS_CONFIG
 
@@ -144,7 +145,7 @@ class GenerateSettings(BaseModel):
     loops: Range = Field(
         (0.0, 0.15),
         description="Share of loops: [least, most] independent loops per open cell "
-        "(the course's maze has 0.08).",
+        "(the course's maze has 0.04).",
     )
     dead_ends: Range = Field(
         (0.0, 1.0), description="[least, most] share of open cells that are dead ends."
