@@ -18,6 +18,8 @@ if TYPE_CHECKING:
 maze_app = typer.Typer(
     name="maze",
     help="Mazes of your own: list the course's, show, generate and convert maze files.",
+    short_help="List, show, generate and convert mazes.",
+    epilog=example("simmer maze generate --seed 7 -o mazes/m7.toml"),
     no_args_is_help=True,
     add_completion=False,
     rich_markup_mode=None,
