@@ -107,6 +107,7 @@ def test_a_few_hundred_seeds_keep_every_promise() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # 10,000 mazes: 1 to 4 minutes on one shared core
 @pytest.mark.parametrize(
     "knobs",
     [
