@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from simmer.config import config_from_dict, load_config
+from simmer.config.mazegen import generate
 from simmer.config.mazes import (
     MAX_MAZE_FILE_BYTES,
     MazeSpec,
@@ -23,6 +24,7 @@ from simmer.config.mazes import (
 )
 from simmer.config.models import MAX_CELLS_PER_SIDE, SIMMER_DEFAULT_WALLS
 from simmer.config.overrides import with_overrides
+from simmer.config.project import GenerateSettings
 from simmer.config.zones import Zones
 from simmer.errors import ConfigError
 
@@ -244,3 +246,28 @@ def test_spec_is_plain_data() -> None:
     maze = MazeSpec(((True, True),))
     assert maze.start_cells() == ((0, 0), (0, 1))
     assert maze.walls() == ((1, 1),)
+
+
+def test_a_maze_override_replaces_a_configuration_without_one() -> None:
+    project = load_config(PROJECT)  # no maze: its walls, start and block are the built-in ones
+    assert project.settings.maze is None
+    seeded = with_overrides(project, {"maze.seed": 5}).settings
+    made = generate(GenerateSettings(seed=5)).maze
+    assert seeded.walls == made.walls()
+    assert list(seeded.robot_start_position) == made.places()["robot_start_position"]
+    assert seeded.robot_outline == project.settings.robot_outline  # the file's own settings stay
+    named = with_overrides(project, {"maze": "mie444"}).settings
+    assert named.walls == SIMMER_DEFAULT_WALLS
+
+
+def test_robot_maze_names_the_maze_a_program_can_build_again() -> None:
+    from simmer.localize.mapdata import map_data
+    from simmer.world import Simulation
+
+    project = load_config(PROJECT)
+    assert map_data(Simulation(project))["maze"] is None
+    seeded = with_overrides(project, {"maze.seed": 9})
+    named = map_data(Simulation(seeded))["maze"]
+    assert named["seed"] == 9
+    again = with_overrides(project, {"maze": named}).settings
+    assert again.walls == seeded.settings.walls

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import report_config_error
 from simmer.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -45,7 +44,8 @@ def _load(name: str) -> MazeSpec:
     try:
         return course_maze(name) if name in COURSE_MAZES else read_maze(name)
     except ConfigError as exc:
-        report_config_error(exc)
+        for issue in exc.issues:  # a maze file's problem is one line naming file, line, column
+            err.print(issue.render(exc.source), style="bold red", markup=False)
         raise typer.Exit(1) from None
 
 
