@@ -271,3 +271,27 @@ def test_robot_maze_names_the_maze_a_program_can_build_again() -> None:
     assert named["seed"] == 9
     again = with_overrides(project, {"maze": named}).settings
     assert again.walls == seeded.settings.walls
+
+
+def test_a_start_pose_round_trips_and_a_bad_one_is_refused_with_its_line() -> None:
+    from dataclasses import replace
+
+    posed = replace(course_maze("mie444"), start_pose=(42.0, 42.0, 90.0))
+    assert read_text(write_text(posed)) == posed
+    assert read_toml(write_toml(posed)) == posed
+    data = posed.settings_data()
+    assert (data["robot_start_position"], data["robot_start_rotation"]) == ([42.0, 42.0], 90.0)
+    picture = write_text(posed)
+    for bad, message in (
+        ("start = 18.0, 30.0, 90.0", "p.txt:9: column 2: the start pose is on a solid cell"),
+        ("start = 42, 42", "p.txt:6: column 9: the start pose is x, y, heading"),
+        ("start = 999.0, 1.0, 0.0", "is not inside the maze"),
+    ):
+        with pytest.raises(ConfigError) as exc:
+            read_text(picture.replace("start = 42.0, 42.0, 90.0", bad), "p.txt")
+        assert message in one_line(exc), one_line(exc)
+    toml = write_toml(posed).replace("robot_start_rotation = 90.0", 'robot_start_rotation = "x"')
+    with pytest.raises(ConfigError) as exc:
+        read_toml(toml, "p.toml")
+    assert "p.toml:" in one_line(exc)
+    assert "the start pose is x, y, heading" in one_line(exc)

@@ -158,3 +158,24 @@ def _write(maze: MazeSpec, output: Path, comment: str = "") -> None:
         err.print(f"cannot write {output}: {exc}", style="bold red", markup=False)
         raise typer.Exit(1) from None
     out.print(f'wrote {output}; use it with maze = "{output}"', markup=False)
+
+
+@maze_app.command(
+    cls=Command, short_help="Edit a maze file in a window (click cells, drag the start).",
+    epilog=example("simmer maze edit mazes/practice.txt"),
+)  # fmt: skip
+def edit(
+    file: Annotated[
+        Path, typer.Argument(help="Maze file (.toml or .txt); a new one starts as mie444.")
+    ],
+) -> None:
+    """Open the maze editor: click a cell to cycle it (solid, open, start, loading, drop-off),
+    drag the robot to move the start pose, R turns it, A shows the ambiguity map, S saves (an
+    invalid maze is not saved: the window says why)."""
+    from simmer.config.mazes import course_maze
+
+    maze = _load(str(file)) if file.exists() else course_maze("mie444")
+    from simmer.ui.mazeedit import edit_maze
+
+    saved = edit_maze(file, maze)
+    out.print(f"saved {file}" if saved else f"{file} not saved", markup=False)

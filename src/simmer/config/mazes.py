@@ -43,10 +43,25 @@ MAX_ZONE_NAME = 16
 SOLID, OPEN, LOADING, START = "#", ".", "L", "S"
 PICTURE_CHARACTERS = "# . L S 1-9"
 TEXT_SUFFIXES = (".txt", ".maze")
-MAZE_KEYS = ("name", "wall_segment_length", "floor_segment_length", "floor_seed", "walls", "zones")
+MAZE_KEYS = (
+    "name",
+    "wall_segment_length",
+    "floor_segment_length",
+    "floor_seed",
+    "walls",
+    "zones",
+    "robot_start_position",
+    "robot_start_rotation",
+)
 """The settings a maze supplies to a configuration (``zones``: its cells, not ``visible``)."""
 _ZONE_KEYS = ("loading", "dropoff", "start")
-_HEADER_KEYS = {"name": "name", "cell": "cell", "tile": "tile", "floor_seed": "floor_seed"}
+_HEADER_KEYS = {
+    "name": "name",
+    "cell": "cell",
+    "tile": "tile",
+    "floor_seed": "floor_seed",
+    "start": "start",
+}
 
 Where = Callable[[int, int], tuple[int | None, int | None]]
 """A cell's (row, column) -> its (line, column) in the file, for messages."""
@@ -56,7 +71,10 @@ Where = Callable[[int, int], tuple[int | None, int | None]]
 class MazeSpec:
     """A maze as a file holds it: cells (True = open), cell and tile size, zones, start cells.
 
-    ``start`` None means every open cell outside the zones (the project's convention)."""
+    ``start`` None means every open cell outside the zones (the project's convention);
+    ``start_pose`` (x, y in inches, heading in degrees) is where the robot starts unless a
+    configuration says (None: the centre of the first start cell, facing the configuration's
+    heading)."""
 
     open: tuple[tuple[bool, ...], ...]
     cell: float = 12.0
@@ -66,6 +84,7 @@ class MazeSpec:
     dropoff: Mapping[str, tuple[Cell, ...]] = field(default_factory=dict)
     start: tuple[Cell, ...] | None = None
     name: str = ""
+    start_pose: tuple[float, float, float] | None = None
 
     @property
     def rows(self) -> int:
@@ -120,8 +139,10 @@ class MazeSpec:
         }
         if self.start is not None:
             zones["start"] = [list(cell) for cell in self.start]
+        pose = {} if self.start_pose is None else {"robot_start_rotation": self.start_pose[2]}
         return {
             **self.places(),
+            **pose,
             "walls": [list(row) for row in self.walls()],
             "wall_segment_length": self.cell,
             "floor_segment_length": self.tile,
@@ -146,8 +167,9 @@ class MazeSpec:
         def centre(r: float, c: float) -> list[float]:
             return [(c + 0.5) * self.cell, (r + 0.5) * self.cell]
 
+        robot = centre(*starts[0]) if self.start_pose is None else list(self.start_pose[:2])
         return {
-            "robot_start_position": centre(*starts[0]),
+            "robot_start_position": robot,
             "block_position": centre(sum(rows) / len(rows), sum(cols) / len(cols)),
         }
 
@@ -206,6 +228,13 @@ def maze_problems(maze: MazeSpec) -> list[tuple[Cell | None, str]]:
                     f"zone name {name!r} must be 1 to {MAX_ZONE_NAME} letters or digits, like 'B1'",
                 )
             )
+    if maze.start_pose is not None:
+        x, y, heading = maze.start_pose
+        r, c = (int(y // maze.cell), int(x // maze.cell)) if math.isfinite(x + y) else (-1, -1)
+        if not math.isfinite(heading) or not (0 <= r < maze.rows and 0 <= c < maze.cols):
+            problems.append((None, f"the start pose {maze.start_pose} is not inside the maze"))
+        elif not maze.open[r][c]:
+            problems.append(((r, c), "the start pose is on a solid cell; drag it to an open one"))
     if problems:
         return problems
     apart = unreachable(maze.open)
@@ -349,6 +378,7 @@ def read_text(text: str, source: str = "<maze>") -> MazeSpec:
         {name: tuple(cells) for name, cells in sorted(dropoff.items(), key=lambda i: i[1][0])},
         tuple(start) or None,
         str(header["name"]),
+        header.get("start"),
     )
     _refuse(source, maze_problems(maze), lambda r, c: (first[r], c + 1))
     return maze
@@ -380,10 +410,13 @@ def _header_line(
             number,
             1,
             f"unknown setting {key!r}; a picture may set "
-            "name, cell, tile, floor_seed and `zone N = NAME`",
+            "name, cell, tile, floor_seed, start and `zone N = NAME`",
         )
     if key == "name":
         header["name"] = value.strip("\"'")
+        return
+    if key == "start":
+        header["start"] = _pose(value.split(","), source, number, _value_column(line))
         return
     try:
         number_value = float(value) if key != "floor_seed" else int(value)
@@ -404,6 +437,19 @@ def _header_line(
             f"{key} must be a number of inches above 0, not {value!r}",
         )
     header[key] = number_value
+
+
+def _pose(
+    values: Any, source: str, line: int | None, column: int | None
+) -> tuple[float, float, float]:
+    """A start pose (x, y in inches, heading in degrees) checked, or a one-line ConfigError."""
+    try:
+        pose = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        pose = ()
+    if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
+        _fail(source, line, column, "the start pose is x, y, heading: three numbers (18, 30, 90)")
+    return (pose[0], pose[1], pose[2])
 
 
 def _value_column(line: str) -> int:
@@ -428,6 +474,8 @@ def write_text(maze: MazeSpec, comment: str = "") -> str:
     if maze.name:
         lines.append(f"name = {maze.name}")
     lines += [f"cell = {maze.cell:g}", f"tile = {maze.tile:g}", f"floor_seed = {maze.floor_seed}"]
+    if maze.start_pose is not None:
+        lines.append("start = " + ", ".join(f"{v!r}" for v in maze.start_pose))
     chars: dict[Cell, str] = dict.fromkeys(maze.loading, LOADING)
     for i, (name, cells) in enumerate(maze.dropoff.items()):
         digit = str(i + 1)
@@ -564,6 +612,13 @@ def read_toml(text: str, source: str = "<maze>") -> MazeSpec:
     name = data.get("name", "")
     if not isinstance(name, str):
         _fail(source, lines.get(("name",)), None, "name must be text in quotes")
+    pose = None
+    if "robot_start_position" in data or "robot_start_rotation" in data:
+        xy = data.get("robot_start_position")
+        at = lines.get(("robot_start_position",)) or lines.get(("robot_start_rotation",))
+        if isinstance(xy, bool) or not isinstance(xy, list) or any(isinstance(v, bool) for v in xy):
+            xy = [math.nan]
+        pose = _pose([*xy, data.get("robot_start_rotation", 0.0)], source, at, None)
     spec = MazeSpec(
         maze.open,
         sizes["wall_segment_length"],
@@ -573,6 +628,7 @@ def read_toml(text: str, source: str = "<maze>") -> MazeSpec:
         dropoff,
         None if start is None else _cells(start, "zones.start", source, lines),
         name,
+        pose,
     )
     _refuse(source, maze_problems(spec), where)
     return spec
@@ -642,6 +698,14 @@ def write_toml(maze: MazeSpec, comment: str = "") -> str:
         f"wall_segment_length = {maze.cell!r}",
         f"floor_segment_length = {maze.tile!r}",
         f"floor_seed = {maze.floor_seed}",
+        *(
+            [
+                f"robot_start_position = [{maze.start_pose[0]!r}, {maze.start_pose[1]!r}]",
+                f"robot_start_rotation = {maze.start_pose[2]!r}",
+            ]
+            if maze.start_pose is not None
+            else []
+        ),
         "walls = [   # 0 solid, 1 open, 2 drop-off zone, 3 loading zone",
     ]
     lines += [f"    [{', '.join(map(str, row))}]," for row in maze.walls()]
