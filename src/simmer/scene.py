@@ -15,6 +15,7 @@ Neither pygame nor matplotlib is imported here.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 from typing import Any
@@ -330,3 +331,17 @@ def ambiguity_items(alike: np.ndarray, cell: float) -> list[Item]:
         at = (float(c + 0.38) * cell, float(r + 0.3) * cell)
         items.append(Label(str(int(alike[r, c])), at, (0, 0, 0), 10, ZONE_NAME))
     return items
+
+
+def open_cell_items(
+    walls: Sequence[Sequence[int]], cell: float, color: Color, alpha: float = 0.5
+) -> list[Item]:
+    """Every open cell of a ``walls`` matrix tinted ``color`` over a map (a sweep's mazes.png
+    colours each maze by its runs' success rate), above the solid cells, under the walls."""
+    rects = tuple(
+        (c * cell, r * cell, cell, cell)
+        for r, row in enumerate(walls)
+        for c, code in enumerate(row)
+        if code
+    )
+    return [Cells(rects, color, alpha, (MAP_CELLS + MAP_WALLS) / 2)]

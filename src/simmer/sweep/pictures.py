@@ -15,7 +15,7 @@ import numpy as np
 from simmer.record.page import draw_items
 from simmer.record.plots import drawable_texts
 from simmer.record.safefile import replacing
-from simmer.scene import Look, Walls, maze_items
+from simmer.scene import Look, Walls, maze_items, open_cell_items
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
 
@@ -187,7 +187,6 @@ def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure 
         return None
     from matplotlib import colormaps
     from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
 
     from simmer.config.maze import Maze
     from simmer.config.mazegen import measure
@@ -228,12 +227,10 @@ def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure 
         successes += met
         colour = cmap(met / len(runs))
         ax = fig.add_subplot(down, across, i + 1)
-        for row, line in enumerate(settings.walls):
-            for col, code in enumerate(line):
-                if code:
-                    cell = (col * maze.cell, row * maze.cell)
-                    ax.add_patch(Rectangle(cell, maze.cell, maze.cell, fc=colour, alpha=0.5))
-        draw_items(ax, maze_items(maze, settings, Look.MAP, Zones.from_settings(settings)))
+        tint = tuple(round(255 * v) for v in colour[:3])
+        items = maze_items(maze, settings, Look.MAP, Zones.from_settings(settings))
+        items += open_cell_items(settings.walls, maze.cell, (tint[0], tint[1], tint[2]))
+        draw_items(ax, sorted(items, key=lambda item: item.layer))
         for r in runs:
             if r["final_x"]:
                 ok = r["success"] == "True"
@@ -252,7 +249,8 @@ def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure 
         name = ", ".join(
             f"{c.split('.')[-1]} {_short(v)}" for c, v in zip(columns, key, strict=True)
         )
-        alike = measure(~maze.solid, maze.cell, 1.0, loading_zone=False).ambiguity
+        opened = np.array(settings.walls) != 0
+        alike = measure(opened, maze.cell, 1.0, loading_zone=False).ambiguity
         ax.set_title(f"{name}: {met}/{len(runs)} (ambiguity {alike:.2f})", fontsize=8)
     total = sum(len(chosen[k]) for k in keys)
     more = f" (the first {len(keys)} of {len(chosen)})" if len(chosen) > len(keys) else ""
