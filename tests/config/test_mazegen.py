@@ -17,13 +17,13 @@ from simmer.config.maze import Maze
 from simmer.config.mazegen import (
     GENERATOR_VERSION,
     Generated,
-    GenerateError,
     alike_counts,
     generate,
     measure,
 )
 from simmer.config.mazes import course_maze, maze_problems, unreachable, write_toml
 from simmer.config.project import GenerateSettings
+from simmer.errors import GenerateError
 from simmer.geometry import place_polygon, polygon_hits_grid
 
 from helpers import REPO

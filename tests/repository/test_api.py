@@ -82,6 +82,7 @@ EXPORTED = {
         "DeviceKindError",
         "ExitCalled",
         "FolderExists",
+        "GenerateError",
         "LimitReached",
         "PlotError",
         "ProgramNotFound",

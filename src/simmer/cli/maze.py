@@ -123,9 +123,9 @@ def generate(
     it, and write it with -o."""
     from pydantic import ValidationError
 
-    from simmer.config.mazegen import GenerateError
     from simmer.config.mazegen import generate as make
     from simmer.config.project import GenerateSettings
+    from simmer.errors import GenerateError
 
     knobs: dict[str, object] = {"seed": seed, "style": style}
     for key, value in (("rows", rows), ("cols", cols)):

@@ -37,6 +37,7 @@ import numpy as np
 
 from simmer.config.mazes import MazeSpec
 from simmer.config.project import Cell, GenerateSettings
+from simmer.errors import GenerateError
 
 GENERATOR_VERSION = 1
 """Changes whenever a seed would give another maze; written into every generated file."""
@@ -72,10 +73,6 @@ class Figures:
             f"{self.dead_ends} dead ends ({self.dead_end_share:.2f}), "
             f"ambiguity {self.ambiguity:.2f}"
         )
-
-
-class GenerateError(ValueError):
-    """No maze met the asked ranges within :data:`MAX_ATTEMPTS` draws."""
 
 
 # ----------------------------------------------------------------------------- the draws

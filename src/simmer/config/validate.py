@@ -139,9 +139,10 @@ def resolve_maze(data: dict[str, Any], base_dir: Path) -> list[ConfigIssue]:
 
 def _maze_settings(raw: Any, data: dict[str, Any], base_dir: Path) -> list[ConfigIssue]:
     """:func:`resolve_maze` for a ``maze`` that is set."""
-    from simmer.config.mazegen import GenerateError, generate
+    from simmer.config.mazegen import generate
     from simmer.config.mazes import COURSE_MAZES, course_maze, read_maze
     from simmer.config.project import GenerateSettings
+    from simmer.errors import GenerateError
 
     try:
         if isinstance(raw, str):
