@@ -1,6 +1,6 @@
-"""Sweeps over mazes (issue 34, docs/mazes.md): ``maze.seed`` and ``maze`` (files) as grid keys
-through a real ``simmer sweep``, each maze drawn as a thumbnail coloured by success, and the
-course project's scenario (random start, block and target) in every generated maze."""
+"""Sweeps over mazes (issue 34, docs/mazes.md): ``maze.seed`` (sampled) and ``maze`` (files,
+gridded) through a real ``simmer sweep``, each maze drawn as a thumbnail coloured by success,
+and the course project's scenario (random start, block and target) in every generated maze."""
 
 from __future__ import annotations
 
@@ -42,7 +42,8 @@ def test_a_sweep_over_generated_mazes_and_maze_files_draws_each_maze(tmp_path: P
     (tmp_path / "seeds.toml").write_text(
         'config = "project.toml"\npolicy = "sweep_policies:drive_and_stop"\nseeds = 2\n'
         'keep = "nothing"\nsuccess = "path_length >= 0"\n'
-        '[grid]\n"scenario.start" = ["random"]\n"maze.seed" = [1, 2, 3]\n',
+        '[grid]\n"scenario.start" = ["random"]\n'
+        '[sample]\ncount = 3\n"maze.seed" = {choice = [1, 2, 3, 4, 5, 6, 7, 8]}\n',
         encoding="utf-8",
     )
     (tmp_path / "files.toml").write_text(
@@ -57,7 +58,7 @@ def test_a_sweep_over_generated_mazes_and_maze_files_draws_each_maze(tmp_path: P
         assert done.returncode == 0, done.stdout + done.stderr
         rows = read_table(out / "results.csv")
         assert {row["status"] for row in rows} == {"ok"}, rows
-        assert len({row[column] for row in rows}) == 3
+        assert len({row[column] for row in rows}) > 1
         assert {row["success"] for row in rows} == {str(succeeded)}
         starts = {row[column]: (row["start_x"], row["start_y"]) for row in rows}
         assert len(set(starts.values())) > 1  # each maze draws its start in its own cells
@@ -70,12 +71,12 @@ def test_a_sweep_over_generated_mazes_and_maze_files_draws_each_maze(tmp_path: P
         assert coloured > 1000, "the mazes are not coloured by their runs' success"
         assert other < coloured / 20
     # the maze a run had is the maze it was swept over: rerun one seed's maze alone
-    settings = with_overrides(load_config(tmp_path / "project.toml"), {"maze.seed": 2}).settings
-    opened = np.array(settings.walls) != 0
+    project = load_config(tmp_path / "project.toml")
     for row in read_table(tmp_path / "seeds-out" / "results.csv"):
-        if row["maze.seed"] == "2":
-            cell = (int(float(row["start_y"]) // 12), int(float(row["start_x"]) // 12))
-            assert opened[cell]
+        settings = with_overrides(project, {"maze.seed": int(row["maze.seed"])}).settings
+        opened = np.array(settings.walls) != 0
+        cell = (int(float(row["start_y"]) // 12), int(float(row["start_x"]) // 12))
+        assert opened[cell]
     by_file = {r["maze"]: r for r in read_table(tmp_path / "files-out" / "results.csv")}
     a = read_maze(mazes / "a.toml")
     x, y = float(by_file["mazes/a.toml"]["start_x"]), float(by_file["mazes/a.toml"]["start_y"])

@@ -174,8 +174,8 @@ more says so in the picture's title)."""
 
 
 def _maze_columns(spec: SweepSpec) -> list[str]:
-    """The swept columns that choose the maze: ``maze`` (files) and ``maze.*`` (``maze.seed``)."""
-    return [c for c in spec.setting_columns if c == "maze" or c.startswith("maze.")]
+    """The swept or sampled columns that choose the maze: ``maze`` (files) and ``maze.*``."""
+    return [c for c in spec.columns if c == "maze" or c.startswith("maze.")]
 
 
 def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure | None:
@@ -194,7 +194,7 @@ def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure 
     from simmer.errors import SimmerError
     from simmer.sweep.runs import build_config
 
-    index = [spec.setting_columns.index(c) for c in columns]
+    index = [spec.columns.index(c) for c in columns]
     chosen: dict[tuple[str, ...], list[Mapping[str, str]]] = {}
     for r in rows:
         chosen.setdefault(tuple(r[c] for c in columns), []).append(r)
