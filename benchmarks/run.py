@@ -22,6 +22,7 @@ SUITES = [
     "bench_localization",
     "bench_limits",
     "bench_lidar",
+    "bench_mazes",
 ]
 
 

@@ -23,6 +23,7 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
     ├── RunFolderError + ValueError a run folder's events or trace cannot be read
     ├── FolderExists + ValueError   ``simmer new`` would write over files
+    ├── GenerateError + ValueError  no generated maze met the asked ranges
     └── FlagError + ValueError      a command-line flag ``simmer run`` refuses
 
     LimitReached (Exception)       a policy ran into its run's limit
@@ -55,6 +56,7 @@ __all__ = [
     "DeviceKindError",
     "ExitCalled",
     "FolderExists",
+    "GenerateError",
     "LimitReached",
     "PlotError",
     "ProgramNotFound",
@@ -191,6 +193,11 @@ class RunFolderError(SimmerError, ValueError):
 
 class FolderExists(SimmerError, ValueError):
     """The destination holds files already: nothing is written over them."""
+
+
+class GenerateError(SimmerError, ValueError):
+    """No maze met the generator's asked ranges within ``MAX_ATTEMPTS`` draws of its seed (the
+    message says which range to widen)."""
 
 
 class FlagError(SimmerError, ValueError):

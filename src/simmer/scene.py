@@ -15,6 +15,7 @@ Neither pygame nor matplotlib is imported here.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 from typing import Any
@@ -309,3 +310,38 @@ def robot_items(
         Outline(body, None, edge, 2.0, ROBOT, dashed),
         Arrow((start[0], start[1]), (end[0], end[1]), edge, 2.0, ROBOT),
     ]
+
+
+ALIKE_COLORS: tuple[Color, ...] = ((46, 160, 67), (255, 200, 40), (245, 130, 30), (215, 40, 40))
+"""An ambiguity map's tints: no look-alike, 1, 2, 3 or more."""
+
+
+def ambiguity_items(alike: np.ndarray, cell: float) -> list[Item]:
+    """An ambiguity map: each open cell tinted by how many other cells look like it to the
+    robot's sensors (``alike[row, col]``, -1 on solid cells), its count written in it."""
+    items: list[Item] = []
+    for shade, color in enumerate(ALIKE_COLORS):
+        chosen = alike >= shade if shade == len(ALIKE_COLORS) - 1 else alike == shade
+        rects = tuple(
+            (c * cell, r * cell, cell, cell) for r, c in zip(*np.nonzero(chosen), strict=True)
+        )
+        if rects:
+            items.append(Cells(rects, color, 0.55, ZONE))
+    for r, c in zip(*np.nonzero(alike >= 0), strict=True):
+        at = (float(c + 0.38) * cell, float(r + 0.3) * cell)
+        items.append(Label(str(int(alike[r, c])), at, (0, 0, 0), 10, ZONE_NAME))
+    return items
+
+
+def open_cell_items(
+    walls: Sequence[Sequence[int]], cell: float, color: Color, alpha: float = 0.5
+) -> list[Item]:
+    """Every open cell of a ``walls`` matrix tinted ``color`` over a map (a sweep's mazes.png
+    colours each maze by its runs' success rate), above the solid cells, under the walls."""
+    rects = tuple(
+        (c * cell, r * cell, cell, cell)
+        for r, row in enumerate(walls)
+        for c, code in enumerate(row)
+        if code
+    )
+    return [Cells(rects, color, alpha, (MAP_CELLS + MAP_WALLS) / 2)]

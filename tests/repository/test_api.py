@@ -85,6 +85,7 @@ EXPORTED = {
         "DeviceKindError",
         "ExitCalled",
         "FolderExists",
+        "GenerateError",
         "LimitReached",
         "PlotError",
         "ProgramNotFound",

@@ -145,6 +145,9 @@ def config_from_toml(text: str, source: str, base_dir: Path) -> SimConfig:
     written twice names both lines: :mod:`simmer.config.toml_errors`).
     """
     data = _toml_data(text, source)
+    if "maze" in data and "walls" in data:
+        message = "sets both maze and walls; a maze supplies the walls: remove one of the two"
+        raise ConfigError(source, with_lines([ConfigIssue("walls", message)], text))
     try:
         return config_from_dict(data, source, base_dir)
     except ConfigError as exc:

@@ -21,7 +21,12 @@ import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from simmer.config.link import LinkSettings
-from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
+from simmer.config.project import (
+    GenerateSettings,
+    ScenarioSettings,
+    ScoreSettings,
+    ZoneSettings,
+)
 from simmer.devices.base import SETTINGS_CONFIG, Color, DeviceParams, Whole
 from simmer.devices.registry import DeviceKinds
 from simmer.errors import ConfigIssue
@@ -136,6 +141,13 @@ class Settings(BaseModel):
         None, min_length=3, description="Polygon [[x, y], ...] in the robot frame, inches."
     )
     # Maze
+    maze: str | GenerateSettings | None = Field(
+        None,
+        description="A maze of its own (docs/mazes.md): a maze file (.toml, or a .txt "
+        "picture) relative to the configuration, a course maze's name ('mie444'), or a "
+        "[maze] table generating one from a seed; it supplies walls, wall_segment_length, "
+        "floor_segment_length, floor_seed and the zones' cells (a setting written here wins).",
+    )
     wall_segment_length: float = Field(12.0, gt=0, description="Side of a maze cell, inches.")
     floor_segment_length: float = Field(
         3.0,

@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from simmer.config.mazes import from_walls
 from simmer.config.models import SimConfig
 from simmer.config.validate import config_from_dict
 
@@ -45,7 +46,9 @@ def _set(
     if not rest:
         node[name] = copy.deepcopy(value)
         return
-    child = node.setdefault(name, {})
+    child = node.get(name)
+    if child is None:  # a table left unset (``maze``: None until a seed is given)
+        child = node[name] = {}
     if not isinstance(child, dict):
         raise KeyError(f"{dotted}: {'.'.join((*way, name))} is a value, not a table")
     _set(child, rest, value, dotted, (*way, name))
@@ -57,7 +60,8 @@ def with_overrides(
     """``config`` with ``overrides`` (dotted keys) applied to its data and validated again as
     a file's data is. Every problem is in a :class:`ConfigError` naming ``source`` (default:
     the configuration's). Its warnings stay those said when it was loaded."""
-    data = _config_data(config)
+    maze_given = any(key == "maze" or key.startswith("maze.") for key in overrides)
+    data = _config_data(config, maze_given)
     apply_overrides(data, overrides.items())
     source_path = Path(config.source)
     base_dir = source_path.parent if source_path.is_file() else Path.cwd()
@@ -67,10 +71,22 @@ def with_overrides(
     return replace(checked, source=config.source, warnings=config.warnings, origin=config.origin)
 
 
-def _config_data(config: SimConfig) -> dict[str, Any]:
+def _config_data(config: SimConfig, maze_given: bool = False) -> dict[str, Any]:
     """A validated configuration as data again: every setting, and each device's settings as
-    given (a device's unset settings keep their defaults, as in its file)."""
+    given (a device's unset settings keep their defaults, as in its file); the settings its
+    ``maze`` supplied (or, with ``maze_given``, the maze an override is about to name) are
+    left to it."""
     data = config.settings.model_dump()
+    if config.settings.maze is not None or maze_given:  # the maze supplies them (maze.seed)
+        s = config.settings
+        places = from_walls(s.walls, cell=s.wall_segment_length, start=s.zones.start).places()
+        for key, value in places.items():
+            default = type(s).model_fields[key].get_default(call_default_factory=True)
+            if list(getattr(s, key)) in (value, list(default)):  # not the file's own place
+                del data[key]
+        for key in ("walls", "wall_segment_length", "floor_segment_length", "floor_seed"):
+            del data[key]
+        data["zones"].update(loading=None, dropoff=None, start=None)
     for spec in config.devices:
         params = spec.params.model_dump(exclude_unset=True)
         data.setdefault(spec.group, {})[spec.id] = {**params, "type": spec.kind}

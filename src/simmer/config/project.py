@@ -16,9 +16,9 @@ wins over the convention. Cells are written ``[row, column]``, row 0 on top, as 
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, Field, field_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from simmer.devices.base import SETTINGS_CONFIG, Whole
 
@@ -113,3 +113,75 @@ class ScoreSettings(BaseModel):
     time_limit: float = Field(
         600.0, gt=0, description="Simulated seconds; a milestone after this earns nothing."
     )
+
+
+MAX_GENERATED_SIDE = 200
+"""Rows, and cells in a row, of a generated maze (the course's is 4 x 8): a 200 x 200 maze
+and its ambiguity take about a second; larger ones can be drawn from smaller pieces."""
+COURSE_ROWS, COURSE_COLS = 4, 8
+Range = tuple[float, float]
+
+
+class GenerateSettings(BaseModel):
+    """The maze generator's knobs: a configuration's `[maze]` table, `simmer maze generate`'s flags.
+
+    See :mod:`simmer.config.mazegen` for what each does."""
+
+    model_config = SETTINGS_CONFIG
+
+    seed: Whole = Field(0, ge=0, description="The maze's seed: the same seed, the same maze.")
+    style: Literal["course", "perfect"] = Field(
+        "course",
+        description="'course': like the course's maze, with zones; 'perfect': a micromouse-"
+        "like perfect maze (odd sizes, one way between any two cells, no zones).",
+    )
+    rows: Whole = Field(
+        COURSE_ROWS, ge=2, le=MAX_GENERATED_SIDE, description="Rows of cells (course: 4)."
+    )
+    cols: Whole = Field(
+        COURSE_COLS, ge=2, le=MAX_GENERATED_SIDE, description="Cells in a row (course: 8)."
+    )
+    cell: float = Field(12.0, ge=10.0, le=120.0, description="Side of a cell, inches.")
+    loops: Range = Field(
+        (0.0, 0.15),
+        description="Share of loops: [least, most] independent loops per open cell "
+        "(the course's maze has 0.04).",
+    )
+    dead_ends: Range = Field(
+        (0.0, 1.0), description="[least, most] share of open cells that are dead ends."
+    )
+    ambiguity: Range = Field(
+        (0.0, 1.0),
+        description="[least, most] share of open cells that look like another to the sensors.",
+    )
+    tolerance: float = Field(
+        1.0, ge=0.0, description="Inches within which two noise-free readings look alike."
+    )
+    dropoff: Whole = Field(4, ge=0, le=9, description="Single-cell drop-off zones (course: 4).")
+    zone_gap: Whole = Field(
+        2, ge=1, description="Cells (Manhattan) at least between any two zones' cells."
+    )
+    floor_seed: Whole | None = Field(
+        None, ge=0, lt=2**32, description="Floor pattern seed; default: from the maze's seed."
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _perfect_size(cls, data: Any) -> Any:
+        """A perfect maze's default size is odd: 5 x 9 (the course's 4 x 8, made odd)."""
+        if isinstance(data, dict) and data.get("style") == "perfect":
+            data = {"rows": COURSE_ROWS + 1, "cols": COURSE_COLS + 1, **data}
+        return data
+
+    @model_validator(mode="after")
+    def _ranges(self) -> GenerateSettings:
+        for name in ("loops", "dead_ends", "ambiguity"):
+            low, high = getattr(self, name)
+            if not 0.0 <= low <= high <= 1.0:
+                raise ValueError(f"{name} must be [least, most] with 0 <= least <= most <= 1")
+        if self.style == "perfect" and (self.rows % 2 == 0 or self.cols % 2 == 0):
+            raise ValueError(
+                f"a perfect maze has odd rows and columns (cells on the even ones, walls "
+                f"between), not {self.rows} x {self.cols}; try rows = 5, cols = 9"
+            )
+        return self

@@ -9,7 +9,7 @@ from pydantic_core import PydanticUndefined
 
 from simmer.config.link import LinkSettings
 from simmer.config.models import Settings
-from simmer.config.project import ScenarioSettings, ScoreSettings, ZoneSettings
+from simmer.config.project import GenerateSettings, ScenarioSettings, ScoreSettings, ZoneSettings
 from simmer.devices import DeviceParams, device_kinds
 
 PROJECT_TABLES = (ZoneSettings, ScenarioSettings, ScoreSettings)
@@ -59,6 +59,9 @@ def reference_markdown() -> str:
         "",
         *_table(Settings),
     ]
+    lines += ["", "## `[maze]` (a generated maze, docs/mazes.md)", ""]
+    lines += [(GenerateSettings.__doc__ or "").strip().splitlines()[0], ""]
+    lines += _table(GenerateSettings)
     for key, model in (("zones", ZoneSettings), ("scenario", ScenarioSettings)):
         lines += ["", f"## `[{key}]` (the course project, docs/project.md)", ""]
         lines += [(model.__doc__ or "").strip().splitlines()[0], "", *_table(model)]

@@ -71,6 +71,7 @@ def config_from_dict(
     issues = found.errors
     groups: dict[str, Any] = {group: data.pop(group, {}) for group in DEVICE_GROUPS}
     found.kinds = _load_plugins(data.get("plugins", []), base_dir, issues)
+    issues += resolve_maze(data, base_dir)
     oversize = oversize_walls(data.get("walls"))
     if oversize is not None:
         issues.append(oversize)
@@ -117,6 +118,57 @@ class _Found:
             self.warnings.append(ConfigIssue(key, (warning or message) + ORIGINAL_RUNS))
         else:
             self.errors.append(ConfigIssue(key, message))
+
+
+# ----------------------------------------------------------------------------- maze
+
+
+def resolve_maze(data: dict[str, Any], base_dir: Path) -> list[ConfigIssue]:
+    """Set the settings a configuration's ``maze`` supplies (a file, a course maze's name or
+    a ``[maze]`` table to generate; docs/mazes.md) in ``data``, where it does not set them
+    itself; the problems, under the key ``maze``. Data holding ``walls`` already (a recording's,
+    or a configuration validated once) keeps them: the maze was resolved when it was made."""
+    raw = data.get("maze")
+    if raw is None or "walls" in data:
+        return []
+    issues = _maze_settings(raw, data, base_dir)
+    if issues:
+        del data["maze"]  # said once, here
+    return issues
+
+
+def _maze_settings(raw: Any, data: dict[str, Any], base_dir: Path) -> list[ConfigIssue]:
+    """:func:`resolve_maze` for a ``maze`` that is set."""
+    from simmer.config.mazegen import generate
+    from simmer.config.mazes import COURSE_MAZES, course_maze, read_maze
+    from simmer.config.project import GenerateSettings
+    from simmer.errors import GenerateError
+
+    try:
+        if isinstance(raw, str):
+            maze = course_maze(raw) if raw in COURSE_MAZES else read_maze(base_dir / raw)
+        elif isinstance(raw, dict):
+            maze = generate(GenerateSettings.model_validate(raw)).maze
+        else:
+            names = ", ".join(COURSE_MAZES)
+            message = f"is {raw!r}; give a maze file, a course maze's name ({names}) or a table"
+            return [ConfigIssue("maze", message)]
+    except ConfigError as exc:
+        return [ConfigIssue("maze", f"{issue.render(exc.source)}") for issue in exc.issues]
+    except ValidationError as exc:
+        return _issues_from_validation(exc, "maze", GenerateSettings)
+    except GenerateError as exc:
+        return [ConfigIssue("maze", str(exc))]
+    for key, value in maze.settings_data().items():
+        if key == "zones":
+            zones = data.setdefault("zones", {})
+            if isinstance(zones, dict):
+                for name, cells in value.items():
+                    if zones.get(name) is None:
+                        zones[name] = cells
+        else:
+            data.setdefault(key, value)
+    return []
 
 
 # ----------------------------------------------------------------------------- plugins

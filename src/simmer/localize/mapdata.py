@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from simmer.config.maze import robot_outline
+from simmer.config.project import GenerateSettings
 from simmer.devices.lidar import Lidar
 from simmer.devices.sensors import Infrared, Ultrasonic
 
@@ -61,6 +62,15 @@ def device_mount(device: Device, sim: Simulation) -> dict[str, Any]:
     return mount
 
 
+def _maze_setting(maze: str | GenerateSettings | None) -> str | dict[str, Any] | None:
+    """The configuration's ``maze`` as it would be written (a file, a course maze's name, the
+    generator's table) or None for inline walls: a program given the configuration file can
+    build the same maze with ``maze`` as an override (a sweep over mazes)."""
+    if maze is None or isinstance(maze, str):
+        return maze
+    return maze.model_dump(mode="json")
+
+
 def map_data(sim: Simulation) -> dict[str, Any]:
     """Everything a program may know of the world before it moves (see the module doc).
 
@@ -77,6 +87,7 @@ def map_data(sim: Simulation) -> dict[str, Any]:
         "version": MAP_VERSION,
         "units": "inches, degrees counter-clockwise from +y",
         "walls": [list(row) for row in settings.walls],
+        "maze": _maze_setting(settings.maze),
         "rows": maze.rows,
         "cols": maze.cols,
         "cell_size": maze.cell,

@@ -8,14 +8,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from simmer.record.page import draw_items
 from simmer.record.plots import drawable_texts
 from simmer.record.safefile import replacing
-from simmer.scene import Look, Walls, maze_items
+from simmer.scene import Look, Walls, maze_items, open_cell_items
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
 
@@ -61,6 +61,15 @@ def draw_pictures(
             _save(_sample_figure(spec, rows), folder / "sampled.png")
             caption = "Success rate against each sampled key, all settings together"
             drawn.append(("sampled.png", caption))
+        mazes = _mazes_figure(spec, rows)
+        if mazes is not None:
+            _save(mazes, folder / "mazes.png")
+            caption = (
+                "Each maze of the sweep, its frame and cells coloured by the success rate of "
+                "its runs (red 0 to green 1), each run's end marked: in which mazes does the "
+                "program fail?"
+            )
+            drawn.append(("mazes.png", caption))
         starts = [r for r in rows if r.get("start_x")]
         if spec.project and starts:
             _save(_start_cells_figure(spec, starts, START_PANELS), folder / "start_cells.png")
@@ -157,6 +166,101 @@ def _start_cells_figure(
         ax.set_yticks([])
         ax.set_title(f"{title}: {met_total}/{len(rows)} runs", fontsize=9)
     return fig
+
+
+MAZE_THUMBNAILS = 60
+"""Mazes drawn at most in a sweep's mazes.png (the first in the sweep's order; a sweep over
+more says so in the picture's title)."""
+
+
+def _maze_columns(spec: SweepSpec) -> list[str]:
+    """The swept or sampled columns that choose the maze: ``maze`` (files) and ``maze.*``."""
+    return [c for c in spec.columns if c == "maze" or c.startswith("maze.")]
+
+
+def _mazes_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Figure | None:
+    """Each maze a sweep runs over (``maze`` or ``maze.*`` swept) as a thumbnail: its open
+    cells and frame coloured by the success rate of its runs (red 0 to green 1), each run's
+    end a dot (green success, red failure), ``k/n`` in its title; None if no maze is swept."""
+    columns = _maze_columns(spec)
+    if not columns:
+        return None
+    from matplotlib import colormaps
+    from matplotlib.figure import Figure
+
+    from simmer.config.maze import Maze
+    from simmer.config.mazegen import measure
+    from simmer.config.zones import Zones
+    from simmer.errors import SimmerError
+    from simmer.sweep.runs import build_config
+
+    index = [spec.columns.index(c) for c in columns]
+    chosen: dict[tuple[str, ...], list[Mapping[str, str]]] = {}
+    for r in rows:
+        chosen.setdefault(tuple(r[c] for c in columns), []).append(r)
+    built: dict[tuple[str, ...], Any] = {}
+    for run in spec.iter_runs():  # the overrides that make each maze, as its runs had them
+        key = tuple(str(run.setting[i]) for i in index)
+        if key in chosen and key not in built:
+            try:
+                built[key] = build_config(run.config, run.overrides).settings
+            except SimmerError:  # an invalid maze: its runs are `invalid`, it is left out
+                built[key] = None
+        if len(built) == min(len(chosen), MAZE_THUMBNAILS):
+            break
+    keys = [k for k in chosen if built.get(k) is not None][:MAZE_THUMBNAILS]
+    if not keys:
+        return None
+    across = min(len(keys), 5)
+    down = math.ceil(len(keys) / across)
+    first = Maze.from_settings(built[keys[0]])
+    fig = Figure(
+        figsize=(2.4 * across, (2.4 * first.height / first.width + 0.45) * down + 0.4),
+        layout="constrained",
+    )
+    cmap = colormaps["RdYlGn"]
+    successes = 0
+    for i, key in enumerate(keys):
+        settings, runs = built[key], chosen[key]
+        maze = Maze.from_settings(settings)
+        met = sum(r["success"] == "True" for r in runs)
+        successes += met
+        colour = cmap(met / len(runs))
+        ax = fig.add_subplot(down, across, i + 1)
+        tint = tuple(round(255 * v) for v in colour[:3])
+        items = maze_items(maze, settings, Look.MAP, Zones.from_settings(settings))
+        items += open_cell_items(settings.walls, maze.cell, (tint[0], tint[1], tint[2]))
+        draw_items(ax, sorted(items, key=lambda item: item.layer))
+        for r in runs:
+            if r["final_x"]:
+                ok = r["success"] == "True"
+                ax.plot(
+                    float(r["final_x"]), float(r["final_y"]), "o", ms=4,
+                    color=SUCCESS_COLOR if ok else FAILURE_COLOR, zorder=4,
+                )  # fmt: skip
+        for side in ax.spines.values():
+            side.set_edgecolor(colour)
+            side.set_linewidth(3)
+        ax.set_xlim(-1, maze.width + 1)
+        ax.set_ylim(maze.height + 1, -1)  # +y down the page, as in the window
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        name = ", ".join(
+            f"{c.split('.')[-1]} {_short(v)}" for c, v in zip(columns, key, strict=True)
+        )
+        opened = np.array(settings.walls) != 0
+        alike = measure(opened, maze.cell, 1.0, loading_zone=False).ambiguity
+        ax.set_title(f"{name}: {met}/{len(runs)} (ambiguity {alike:.2f})", fontsize=8)
+    total = sum(len(chosen[k]) for k in keys)
+    more = f" (the first {len(keys)} of {len(chosen)})" if len(chosen) > len(keys) else ""
+    fig.suptitle(f"{len(keys)} mazes{more}: {successes}/{total} runs succeeded", fontsize=10)
+    return fig
+
+
+def _short(value: str) -> str:
+    """A maze file by its name alone, a seed as it is."""
+    return Path(value).name if ("/" in value or "\\" in value) else value
 
 
 def _save(fig: Figure, target: Path) -> None:
