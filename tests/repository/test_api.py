@@ -128,6 +128,15 @@ EXPORTED = {
         "sweep_from_dict",
         "wilson_interval",
     ],
+    "simmer.batch": ["Batch", "BatchError", "Model"],
+    "simmer.gym": [
+        "DISCRETE_MOVES",
+        "ENVIRONMENTS",
+        "LAB_NOISE",
+        "MazeEnv",
+        "MazeVectorEnv",
+        "register_environments",
+    ],
 }
 """Each public module's names, sorted."""
 
