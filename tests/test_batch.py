@@ -3,7 +3,9 @@ way, bit for bit, with noise on; the particle filter's model agrees with the sim
 
 from __future__ import annotations
 
+import importlib.util
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -11,7 +13,7 @@ import pytest
 from simmer import Simulation
 from simmer.batch import NOISE_BLOCK, Batch, BatchError, Model
 
-from helpers import make_config, noisy_data
+from helpers import EXAMPLES, make_config, noisy_data
 
 COMMANDS = ["w0", "r0"]
 
@@ -175,3 +177,37 @@ def test_the_model_moves_particles_as_the_drive_does() -> None:
         np.tile(start, (500, 1)), "w0", 10.0, np.random.default_rng(4)
     )
     assert np.std(noisy[:, 1]) > 0.1  # the drive's error spreads them
+
+
+def load_example(name: str) -> Any:
+    """An example program as a module (examples/ is not a package)."""
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.slow
+def test_the_particle_filter_example_localizes_on_the_lab_maze() -> None:
+    """examples/particle_filter.py, with a noisy Simulation as the robot: from not knowing
+    where it starts, the estimate ends within 3 in of the truth."""
+    example = load_example("particle_filter")
+    config = make_config(noisy_data())
+    sim = Simulation(config, seed=5)
+    model = Model(config, ["u0", "u1", "u2", "u3"])
+
+    def read() -> list[float]:
+        return sim.command("u0,u1,u2,u3")
+
+    def drive(name: str, amount: float) -> None:
+        sim.command(f"{name}-{amount!r}")
+        sim.run_until_idle()
+
+    f = example.localize(read, drive, model, moves=12)
+    x, y, heading = f.estimate()
+    truth = sim.robot.pose
+    assert math.hypot(x - truth.x, y - truth.y) < 3.0, (f.estimate(), truth)
+    assert abs((heading - truth.heading + 180) % 360 - 180) < 15
+    assert f.spread() < 3.0
