@@ -32,7 +32,7 @@ from simmer.config.models import SimConfig
 from simmer.config.scenario import draw_scenario
 from simmer.config.zones import Zones
 from simmer.devices import Drive, DriveParams, UltrasonicParams
-from simmer.errors import SimmerError
+from simmer.errors import BatchError
 from simmer.geometry import FloatArray, ray_grid, ray_segments, robot_blocked
 from simmer.world.simulation import source_stream
 
@@ -48,10 +48,6 @@ MAX_ROBOTS = 1_000_000
 
 _jit = numba.njit(cache=True, nogil=True, fastmath=False)
 _MAX_THREADS: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
-
-
-class BatchError(SimmerError):
-    """A configuration, a seed list or a command a batch cannot take: one plain line."""
 
 
 # --------------------------------------------------------------------------- compiled step

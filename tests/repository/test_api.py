@@ -73,6 +73,7 @@ EXPORTED = {
     ],
     "simmer.ending": ["RunEnd"],
     "simmer.errors": [
+        "BatchError",
         "BusClosed",
         "ClientError",
         "CommandError",
