@@ -115,7 +115,10 @@ def test_steps_at_once_equal_steps_one_by_one() -> None:
 def test_reset_gives_the_start_again_and_a_new_seed_new_noise() -> None:
     config = make_config(noisy_data())
     batch = Batch(config, [4, 4])
-    batch.command(["w0-10", "w0-10"], steps=200)
+    batch.command(["w0-10", "w0-10"])
+    assert batch.moving.all()
+    batch.step(steps=199)
+    assert not batch.moving.any()
     first = batch.poses.copy()
     np.testing.assert_array_equal(first[0], first[1])  # same seed, same run
     batch.reset([1], [9])
@@ -132,6 +135,10 @@ def test_bad_batches_and_commands_say_what_to_fix() -> None:
     with pytest.raises(BatchError, match="not an ultrasonic sensor"):
         Batch(config, [1], sensors=["w0"])
     batch = Batch(config, [1])
+    with pytest.raises(BatchError, match="threads must be 1 to"):
+        Batch(config, [1], threads=0)
+    with pytest.raises(BatchError, match="the form is drive-amount"):
+        batch.command(["w0"])
     with pytest.raises(BatchError, match="no drive 'z9'"):
         batch.command(["z9-3"])
     with pytest.raises(BatchError, match="finite"):
@@ -211,3 +218,18 @@ def test_the_particle_filter_example_localizes_on_the_lab_maze() -> None:
     assert math.hypot(x - truth.x, y - truth.y) < 3.0, (f.estimate(), truth)
     assert abs((heading - truth.heading + 180) % 360 - 180) < 15
     assert f.spread() < 3.0
+
+
+@pytest.mark.slow  # compiles the threaded kernel (Numba does not cache it)
+def test_two_threads_step_the_same_robots() -> None:
+    config = make_config(noisy_data())
+    one = Batch(config, list(range(40)))
+    two = Batch(config, list(range(40)), threads=2)
+    rng = np.random.default_rng(9)
+    for _ in range(30):
+        drive, amount = random_commands(rng, 40)
+        one.step(drive, amount, steps=5)
+        two.step(drive, amount, steps=5)
+    np.testing.assert_array_equal(one.poses, two.poses)
+    np.testing.assert_array_equal(one.readings, two.readings)
+    np.testing.assert_array_equal(one.collisions, two.collisions)

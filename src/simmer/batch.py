@@ -805,13 +805,6 @@ class Batch:
             drive[i] = self.drive_index(name)
         return self.step(drive, amount, steps)
 
-    def until_idle(self, max_steps: int = 3600) -> None:
-        """Step every robot (one step at a time) until none moves, or ``max_steps``."""
-        for _ in range(max_steps):
-            if not self.moving.any():
-                return
-            self.step()
-
 
 # --------------------------------------------------------------------------- the model
 

@@ -101,7 +101,7 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
         pose = np.array(sim.robot.pose)
         block = np.array([[sim.block.x, sim.block.y]])
         reached = bool(self.task.reached(pose, block)[0])
-        reward = self.task.reward(reached, sim.collisions - before)
+        reward = float(self.task.reward(reached, sim.collisions - before))
         truncated = self._steps >= self.task.max_steps and not reached
         if self.render_mode == "human":
             self.render()

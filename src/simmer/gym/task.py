@@ -169,8 +169,9 @@ class Task:
             obs = np.concatenate((obs, np.asarray(pose, dtype=np.float64)))
         return obs
 
-    def reward(self, reached: bool, new_collisions: int) -> float:
-        """The reward of one step: reaching the block, minus collisions and a step's cost."""
+    def reward(self, reached: Any, new_collisions: Any) -> Any:
+        """The reward of one step (or of each robot's, given arrays): reaching the block, less
+        collisions and a step's cost."""
         return (
             self.reach_reward * reached
             - self.collision_penalty * new_collisions

@@ -126,13 +126,7 @@ class MazeVectorEnv(VectorEnv[np.ndarray, Any, np.ndarray]):
                 self._continuous(np.asarray(actions, dtype=np.float64).reshape(n, 2), active)
         self._episode_steps[active] += 1
         reached = task.reached(batch.poses, batch.block_poses) & active
-        rewards = np.where(
-            active,
-            task.reach_reward * reached
-            - task.collision_penalty * (batch.collisions - before)
-            - task.step_penalty,
-            0.0,
-        )
+        rewards = np.where(active, task.reward(reached, batch.collisions - before), 0.0)
         truncated = (self._episode_steps >= task.max_steps) & ~reached & active
         self._autoreset = reached | truncated
         return self._observe(), rewards, reached, truncated, self._info()
