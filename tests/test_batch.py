@@ -154,7 +154,7 @@ def test_the_model_reads_what_the_simulation_expects() -> None:
     model = Model(config)
     rng = np.random.default_rng(2)
     poses = np.column_stack(
-        (rng.uniform(2, 94, 200), rng.uniform(2, 46, 200), rng.uniform(0, 360, 200))
+        (rng.uniform(2, 94, 100), rng.uniform(2, 46, 100), rng.uniform(0, 360, 100))
     )
     mine = model.expected(poses)
     theirs = sim.expected(poses, list(model.sensor_ids))
