@@ -23,6 +23,7 @@ SUITES = [
     "bench_limits",
     "bench_lidar",
     "bench_mazes",
+    "bench_batch",
 ]
 
 

@@ -28,6 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=61202, help="persistent protocol port")
     parser.add_argument("--step", type=float, default=0.5, help="inches per step")
+    parser.add_argument("--limit", type=float, default=LIMIT, help="inches kept from obstacles")
     parser.add_argument("--max-steps", type=int, default=200)
     args = parser.parse_args(argv)
 
@@ -36,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
             readings = robot.send(SENSORS)
             print(f"step {step:3d}  " + "  ".join(f"u{i} {v:6.2f}" for i, v in enumerate(readings)))
             ahead = readings[0]  # u0 faces forward: the one sensor a step takes closer
-            if ahead - args.step < LIMIT or min(readings) < LIMIT:
+            if ahead - args.step < args.limit or min(readings) < args.limit:
                 print(f"obstacle {min(readings):.2f} in away: stopping")
                 return step
             robot.drive("w0", args.step)

@@ -10,6 +10,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import settings
 
@@ -76,6 +77,11 @@ def compiled_kernels() -> None:
     link.exchange("u0,u1,u2,u3")
     link.exchange("w0-1")
     link.clock("!idle")
+    from simmer.batch import Batch, Model  # the batch's kernels (issue 36)
+
+    Batch(None, [0]).command(["w0-1"])
+    model = Model(None)
+    model.read(model.move([[12.0, 12.0, 0.0]], "w0", 1.0), np.random.default_rng(0))
 
 
 @pytest.hookimpl(tryfirst=True)

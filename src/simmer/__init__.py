@@ -4,9 +4,10 @@ The names below are imported on first use (PEP 562), so ``import simmer.client``
 program does not load the simulator (NumPy, Numba, pydantic): a program pays only for the link.
 
 The public API is this package and the modules :mod:`simmer.client`, :mod:`simmer.devices`,
-:mod:`simmer.ending`, :mod:`simmer.errors`, :mod:`simmer.pose`, :mod:`simmer.record` and
-:mod:`simmer.sweep`, each with its names in ``__all__`` (docs/api.md). Every other module, and
-the modules inside those packages, is internal and may change in any release
+:mod:`simmer.ending`, :mod:`simmer.errors`, :mod:`simmer.pose`, :mod:`simmer.record`,
+:mod:`simmer.sweep`, :mod:`simmer.batch` and :mod:`simmer.gym` (with the ``gym`` extra), each
+with its names in ``__all__`` (docs/api.md). Every other module, and the modules inside those
+packages, is internal and may change in any release
 (``simmer._api`` lists them).
 """
 

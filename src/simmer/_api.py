@@ -18,6 +18,8 @@ PUBLIC = (
     "simmer.pose",
     "simmer.record",
     "simmer.sweep",
+    "simmer.batch",
+    "simmer.gym",
 )
 """The modules users import, in the order docs/api.md shows them."""
 

@@ -24,7 +24,8 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── RunFolderError + ValueError a run folder's events or trace cannot be read
     ├── FolderExists + ValueError   ``simmer new`` would write over files
     ├── GenerateError + ValueError  no generated maze met the asked ranges
-    └── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    ├── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    └── BatchError + ValueError     a batch or an environment given what it cannot take
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -47,6 +48,7 @@ from functools import cache
 from pathlib import Path
 
 __all__ = [
+    "BatchError",
     "BusClosed",
     "ClientError",
     "CommandError",
@@ -169,6 +171,11 @@ class ProgramNotFound(SimmerError, FileNotFoundError):
 
 class BusClosed(SimmerError):
     """The simulation loop has stopped; no more messages will be answered."""
+
+
+class BatchError(SimmerError, ValueError):
+    """A batch (:mod:`simmer.batch`) or a Gymnasium environment (:mod:`simmer.gym`) given a
+    configuration, seeds, a command or an option it cannot take: one plain line."""
 
 
 class SweepError(SimmerError, ValueError):

@@ -76,6 +76,7 @@ EXPORTED = {
     ],
     "simmer.ending": ["RunEnd"],
     "simmer.errors": [
+        "BatchError",
         "BusClosed",
         "ClientError",
         "CommandError",
@@ -131,6 +132,15 @@ EXPORTED = {
         "success_condition",
         "sweep_from_dict",
         "wilson_interval",
+    ],
+    "simmer.batch": ["Batch", "BatchError", "Model"],
+    "simmer.gym": [
+        "DISCRETE_MOVES",
+        "ENVIRONMENTS",
+        "LAB_NOISE",
+        "MazeEnv",
+        "MazeVectorEnv",
+        "register_environments",
     ],
 }
 """Each public module's names, sorted."""

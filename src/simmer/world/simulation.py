@@ -63,6 +63,15 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 """The largest reading a 4-byte reply can carry; a device reading beyond it answers NaN."""
 
 
+def source_stream(seed: int, source: str) -> np.random.Generator:
+    """The random stream of one source of noise of a run seeded ``seed`` (``device:u0``):
+    ``SeedSequence`` with a stable key from the source's name (:meth:`Simulation.stream`; a
+    batch's robot draws from the same streams)."""
+    digest = hashlib.blake2b(source.encode("utf-8"), digest_size=8).digest()
+    key = int.from_bytes(digest, "little")
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(key,)))
+
+
 class Answer(NamedTuple):
     """One command's reply ``value`` and, for a NaN, ``why`` (logged at ``level`` by whoever
     reports it)."""
@@ -112,9 +121,7 @@ class Simulation:
         (``SeedSequence`` with a stable key), so adding a sensor, removing one or polling a
         drive never changes another source's noise.
         """
-        digest = hashlib.blake2b(source.encode("utf-8"), digest_size=8).digest()
-        key = int.from_bytes(digest, "little")
-        return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(key,)))
+        return source_stream(self.seed, source)
 
     def _build(self) -> None:
         """Create robot, block and devices at their start, each device with a fresh stream."""
