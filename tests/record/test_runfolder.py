@@ -116,7 +116,7 @@ def test_a_different_seed_replays_to_a_different_trace(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     "path",
-    [EXAMPLES / "tof_rover.toml", SIMMER_PY / "lab_rover_noisy.py", None],
+    [EXAMPLES / "bumper_rover.toml", SIMMER_PY / "lab_rover_noisy.py", None],
     ids=["plug-in", "config.py", "built-in"],
 )
 def test_the_manifest_rebuilds_the_configuration(tmp_path: Path, path: Path | None) -> None:

@@ -21,12 +21,17 @@ pytestmark = pytest.mark.timeout(180)
 
 
 def quiet_default() -> Simulation:
-    """examples/simmer_default.toml (ultrasonic, gyroscope, compass, infrared) with no noise."""
+    """examples/simmer_default.toml (ultrasonic, gyroscope, compass, infrared) with no noise,
+    and three time-of-flight sensors (above the block, the other preset, millimetres)."""
     data = tomllib.loads((EXAMPLES / "simmer_default.toml").read_text(encoding="utf-8"))
     for sensor in data["sensors"].values():
         if "error" in sensor:
             sensor["error"] = 0.0
     data["sensors"]["c0"]["bias"] = 7.5  # a compass's bias is part of its noise-free reading
+    quiet = {"type": "tof", "error": 0.0, "error_constant": 0.0}
+    data["sensors"]["t0"] = quiet | {"position": [0, 2], "height": 4.0}
+    data["sensors"]["t1"] = quiet | {"position": [1, 0, 2], "rotation": -60, "preset": "vl53l1x"}
+    data["sensors"]["t2"] = quiet | {"rotation": 120, "units": "mm", "mode": "long_range"}
     return Simulation(make_config(data), seed=3)
 
 

@@ -215,6 +215,11 @@ def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
     drawn = settings.rand_bias and any(settings.bias_strength)
     found: dict[str, list[str]] = {}
     for spec in config.devices:
+        own = getattr(spec.params, "noise_keys", None)
+        if callable(own):  # a kind whose noise settings have other names (tof, imu, encoder)
+            if names := own():
+                found[spec.id] = names
+            continue
         for name in ("error", "bias"):
             value = getattr(spec.params, name, 0.0)
             values = value.model_dump().values() if isinstance(value, BaseModel) else [value]

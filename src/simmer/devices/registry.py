@@ -39,6 +39,7 @@ BUILTIN_KINDS = {
     "compass": "simmer.devices.sensors:Compass",
     "infrared": "simmer.devices.sensors:Infrared",
     "gripper": "simmer.devices.gripper:Gripper",
+    "tof": "simmer.devices.tof:TimeOfFlight",
     # a device class written for the original SimMeR
     "simmer_device": "simmer.compat.template:SimmerDevice",
 }
