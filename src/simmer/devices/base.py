@@ -150,6 +150,10 @@ class RobotView(Protocol):
     pose: Pose
     turned: float
     """Degrees turned during the last step (what a gyroscope senses)."""
+    moved: Vec2
+    """Inches moved during the last step, in the robot's frame at the step's start (x toward
+    the robot's left as the window shows it, y ahead; an IMU and an encoder sense it); 0 in a
+    step the robot was blocked or placed by hand."""
     height: float
     outline: FloatArray
     devices: dict[str, Device]
