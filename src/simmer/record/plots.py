@@ -94,6 +94,9 @@ SENSOR_UNITS = {
     "infrared": "floor (1 white, 0 black)",
     "compass": "heading (°)",
     "gyroscope": "angle turned (°)",
+    "tof": "distance (in, or mm)",
+    "imu": "yaw rate (°/s) or acceleration (in/s²)",
+    "encoder": "wheel counts",
 }
 """What the built-in sensor kinds read, for the y axis of their panel."""
 LOCALIZATION_IMAGE = "localization.png"
