@@ -19,7 +19,7 @@ from pydantic import Field
 
 from simmer.devices.base import Device, DeviceParams, World
 from simmer.errors import CommandError
-from simmer.geometry import FloatArray, Vec2, rectangle, rotate
+from simmer.geometry import FloatArray, rectangle
 
 G_IN_S2 = 386.0886
 """Standard gravity in inches per second squared."""
@@ -33,6 +33,15 @@ NonNegativePair = tuple[
 COUNT_SLACK = 1e-6
 """Counts an encoder's angle may fall short of a whole count and still reach it: the sum of
 many steps' float arcs lands a hair below a whole count it reaches exactly."""
+
+Step = tuple[float, float, float, float]
+"""The robot's motion in one step: moved x and y (robot frame), degrees turned, the heading
+after it."""
+STANDING: Step = (0.0, 0.0, 0.0, 0.0)
+"""A step before the first: the robot did not move."""
+
+WALK_BLOCK = 1024
+"""Steps of an IMU's bias walk drawn at once (and of an encoder's slip)."""
 
 IMU_AXES = ("yaw rate", "x acceleration", "y acceleration")
 """What ``i0-0``, ``i0-1`` and ``i0-2`` read."""
@@ -97,39 +106,78 @@ class Imu(Device):
         assert isinstance(params, ImuParams)
         self.settings = params
         self.read_rng, self.walk_rng = rng.spawn(2)
-        self.bias = np.array([params.gyro_bias, *params.accel_bias], dtype=np.float64)
-        self.density = np.array(
-            [params.gyro_noise_density, *params.accel_noise_density], dtype=np.float64
-        )
+        self.bias0 = (params.gyro_bias, *params.accel_bias)
+        self.density = (params.gyro_noise_density, *params.accel_noise_density)
         self.walk = np.array([params.gyro_bias_walk, *params.accel_bias_walk], dtype=np.float64)
-        self.true = np.zeros(3)
-        """The latest noise-free yaw rate and accelerations, chip axes."""
-        self.velocity = Vec2(0.0, 0.0)
-        """The mounting point's velocity in the world in the last step, in/s."""
+        self.walked = np.zeros((0, 3))
+        """The bias walk over a block of steps: row k, its sum after the block's step k + 1."""
+        self.walk_base = np.zeros(3)
+        """The walk of the blocks before it."""
+        self.walk_from = 0
+        """The step the block starts after."""
+        self.last: Step = STANDING
+        """The robot's motion in the last step."""
+        self.before_last: Step = STANDING
+        """... and in the step before it."""
+        rad = math.radians(self.rotation)
+        self.turn = (math.cos(rad), math.sin(rad))
+        """Cosine and sine of the device's rotation on the robot."""
 
     def update(self, world: World) -> None:
-        """Sense this step's motion, and let the bias wander."""
-        dt = world.dt
+        """Keep this step's motion and the last one's (what a read needs, and all a step
+        costs: the readings are worked out when they are read)."""
         robot = world.robot
-        turned = math.radians(robot.turned)
-        heading = robot.pose.heading
-        before = heading - robot.turned
+        self.before_last = self.last
+        self.last = (robot.moved.x, robot.moved.y, robot.turned, robot.pose.heading)
+
+    def _velocity(self, step: Step, dt: float) -> tuple[float, float, float, float]:
+        """The mounting point's world velocity in ``step`` (in/s), and the cosine and sine of
+        the heading the step started from."""
+        mx, my, turned, heading = step
+        before = heading - turned
+        cb, sb = math.cos(math.radians(before)), math.sin(math.radians(before))
+        cn, sn = math.cos(math.radians(heading)), math.sin(math.radians(heading))
         px, py = self.position
-        # the mounting point's displacement: the centre's, plus its turn about the centre
-        step = rotate(robot.moved.x, robot.moved.y, before)
-        now = rotate(px, py, heading)
-        then = rotate(px, py, before)
-        velocity = Vec2((step.x + now.x - then.x) / dt, (step.y + now.y - then.y) / dt)
-        ax = (velocity.x - self.velocity.x) / dt
-        ay = (velocity.y - self.velocity.y) / dt
-        self.velocity = velocity
-        # a centred difference: the acceleration at the step's start, so into the device's frame
-        # as it was then (sim axes: x toward the robot's left in the window), then the chip's
-        # (x to the right): x changes sign, and so does the turn about z
-        local = rotate(ax, ay, -(before + self.rotation))
-        self.true[:] = (-math.degrees(turned) / dt, -local.x, local.y)
-        if self.walk.any():
-            self.bias += self.walk * math.sqrt(dt) * self.walk_rng.standard_normal(3)
+        # the centre's displacement (robot frame at the step's start, rotated into the
+        # world's) plus the mounting point's turn about the centre
+        vx = (mx * cb - my * sb + px * (cn - cb) - py * (sn - sb)) / dt
+        vy = (mx * sb + my * cb + px * (sn - sb) + py * (cn - cb)) / dt
+        return vx, vy, cb, sb
+
+    def true(self, axis: int, dt: float) -> float:
+        """The noise-free reading of ``axis`` (chip axes) after the last step."""
+        if axis == 0:  # z is up: anticlockwise in the window, the heading's opposite
+            return -self.last[2] / dt
+        if not (any(self.last[:3]) or any(self.before_last[:3])):
+            return 0.0  # standing still: the usual case
+        vx, vy, cb, sb = self._velocity(self.last, dt)
+        ux, uy, _, _ = self._velocity(self.before_last, dt)
+        ax, ay = (vx - ux) / dt, (vy - uy) / dt
+        # a centred difference: the acceleration at the last step's start, so into the
+        # device's frame as it was then (sim axes: x toward the robot's left in the window),
+        # then the chip's (x to the right, so x changes sign)
+        cr, sr = self.turn
+        c = cb * cr - sb * sr  # cos and sin of -(before + rotation)
+        s = -(sb * cr + cb * sr)
+        return -(ax * c - ay * s) if axis == 1 else ax * s + ay * c
+
+    def bias(self, axis: int, world: World) -> float:
+        """The bias of ``axis`` now: the start's plus its walk over the steps so far, drawn
+        :data:`WALK_BLOCK` steps at a time in one order, so the same whenever it is read."""
+        bias = self.bias0[axis]
+        if not self.walk.any():
+            return bias
+        dt = world.dt
+        step = round(world.time / dt)
+        while step > self.walk_from + len(self.walked):
+            if len(self.walked):
+                self.walk_base += self.walked[-1]
+                self.walk_from += len(self.walked)
+            draws = self.walk_rng.standard_normal((WALK_BLOCK, 3))
+            self.walked = np.cumsum(draws * (self.walk * math.sqrt(dt)), axis=0)
+        if step > self.walk_from:
+            bias += float(self.walk_base[axis] + self.walked[step - self.walk_from - 1, axis])
+        return bias
 
     def simulate(self, value: float, world: World) -> float:
         """Axis ``value`` (0 yaw rate, 1 x, 2 y) with its bias and white noise."""
@@ -139,8 +187,8 @@ class Imu(Device):
                 f"{self.id} reads axis 0 ({IMU_AXES[0]}, °/s), 1 ({IMU_AXES[1]}) or 2 "
                 f"({IMU_AXES[2]}, in/s²), not {value:g}"
             )
-        reading = float(self.true[axis] + self.bias[axis])
-        density = float(self.density[axis])
+        reading = self.true(axis, world.dt) + self.bias(axis, world)
+        density = self.density[axis]
         if density:
             reading += density / math.sqrt(world.dt) * float(self.read_rng.standard_normal())
         return reading
@@ -197,6 +245,9 @@ class Encoder(Device):
         """The wheel's angle since the start, in counts (not rounded)."""
         self.zero = 0
         """The count a reset made 0."""
+        self.slips = np.zeros(0)
+        """This block's slips, each ``slip * |normal()|``, one for each step the wheel turns."""
+        self.slip_at = 0
 
     def update(self, world: World) -> None:
         """Turn the wheel by this step's motion, with slip."""
@@ -205,7 +256,11 @@ class Encoder(Device):
         if arc == 0.0:
             return
         if self.settings.slip:
-            arc *= 1.0 + self.settings.slip * abs(float(self.rng.standard_normal()))
+            if self.slip_at == len(self.slips):  # drawn a block at a time, as the IMU's walk
+                self.slips = self.settings.slip * np.abs(self.rng.standard_normal(WALK_BLOCK))
+                self.slip_at = 0
+            arc *= 1.0 + float(self.slips[self.slip_at])
+            self.slip_at += 1
         self.angle += arc * self.counts_per_inch
 
     @property
