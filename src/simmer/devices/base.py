@@ -226,6 +226,10 @@ class Device:
     kind: ClassVar[str] = ""
     Params: ClassVar[type[DeviceParams]] = DeviceParams
     default_outline: ClassVar[FloatArray] = rectangle(1.0, 1.0)
+    readings: ClassVar[tuple[str, ...]] = ("",)
+    """What its commands read, each a column of a run's trace named by the id and this suffix:
+    one reading (``""``) for most kinds; an IMU's three axes (``"", "-1", "-2"``: ``i0``,
+    ``i0-1``, ``i0-2``)."""
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         self.id = device_id

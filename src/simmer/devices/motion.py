@@ -100,6 +100,7 @@ class Imu(Device):
 
     Params = ImuParams
     default_outline: ClassVar[FloatArray] = rectangle(0.8, 0.8)
+    readings: ClassVar[tuple[str, ...]] = ("", "-1", "-2")
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         super().__init__(device_id, params, rng)
