@@ -14,6 +14,7 @@ from simmer.devices.base import (
     World,
 )
 from simmer.devices.drive import Axes, Drive, DriveParams, Motion
+from simmer.devices.motion import Encoder, EncoderParams, Imu, ImuParams
 from simmer.devices.motor import Motor, MotorParams
 from simmer.devices.registry import (
     DeviceKinds,
@@ -32,6 +33,7 @@ from simmer.devices.sensors import (
     Ultrasonic,
     UltrasonicParams,
 )
+from simmer.devices.tof import TimeOfFlight, TimeOfFlightParams
 from simmer.geometry import heading_vector
 from simmer.pose import Vec2
 
@@ -45,8 +47,12 @@ __all__ = [
     "DeviceParams",
     "Drive",
     "DriveParams",
+    "Encoder",
+    "EncoderParams",
     "Gyroscope",
     "GyroscopeParams",
+    "Imu",
+    "ImuParams",
     "Infrared",
     "InfraredParams",
     "Motion",
@@ -54,6 +60,8 @@ __all__ = [
     "MotorParams",
     "Segment",
     "Shape",
+    "TimeOfFlight",
+    "TimeOfFlightParams",
     "Ultrasonic",
     "UltrasonicParams",
     "Vec2",

@@ -1,7 +1,7 @@
 """The time-of-flight ranger kind (``tof``): ST's VL53L0X and VL53L1X as presets.
 
 A time-of-flight sensor times a laser pulse's return over a narrow cone. SimMeR casts
-``num_rays`` rays across the cone (3 by default: cheaper than the ultrasonic fan's 7) with the
+``num_rays`` rays across the cone (3 by default, against the ultrasonic fan's 7) with the
 ultrasonic kind's kernel and reads the nearest return; the block is seen by the same height
 rule. A preset and a ranging mode set the field of view, the longest range, the ranging error
 and the value the real drivers return when nothing is in reach (docs/devices.md, "Built-in
@@ -111,7 +111,7 @@ class TimeOfFlightParams(DeviceParams):
     units: Literal["in", "mm"] = Field(
         "in", description="'in': inches as every SimMeR sensor; 'mm': whole millimetres."
     )
-    num_rays: Whole = Field(3, ge=1, le=100, description="Rays cast across the cone.")
+    num_rays: Whole = Field(3, ge=1, le=1000, description="Rays cast across the cone.")
     height: float | None = Field(
         None, gt=0, description="Mounting height in inches; defaults to the block size."
     )
