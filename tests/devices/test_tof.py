@@ -13,6 +13,7 @@ from simmer.devices import Segment
 from simmer.devices.tof import MM_PER_INCH, PRESETS
 from simmer.errors import ConfigError
 from simmer.geometry import Pose
+from simmer.localize.mapdata import map_data
 
 from helpers import default_data, make_config, make_sim
 
@@ -149,3 +150,14 @@ def test_a_mode_the_preset_lacks_is_refused_by_name() -> None:
     data["sensors"]["t0"] = {"type": "tof", "preset": "vl53l1x", "mode": "long_range"}
     with pytest.raises(ConfigError, match=r"mode.*vl53l1x has the ranging modes 'short'"):
         make_config(data)
+
+
+def test_the_map_a_program_gets_has_the_tof_and_encoder_figures() -> None:
+    data = default_data()
+    data["sensors"]["t0"] = {"type": "tof", "preset": "vl53l1x", "mode": "short", "units": "mm"}
+    data["sensors"]["e0"] = {"type": "encoder", "wheel": "right", "counts_per_rev": 1440}
+    mounts = {m["id"]: m for m in map_data(make_sim(data))["devices"]}
+    assert mounts["t0"]["fov"] == 27.0
+    assert mounts["t0"]["max_range"] == pytest.approx(1300.0 / MM_PER_INCH)
+    assert (mounts["t0"]["out_of_range"], mounts["t0"]["units"]) == (-1.0, "mm")
+    assert (mounts["e0"]["wheel"], mounts["e0"]["counts_per_rev"]) == ("right", 1440.0)

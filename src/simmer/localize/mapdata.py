@@ -10,7 +10,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from simmer.config.maze import robot_outline
+from simmer.devices.motion import Encoder
 from simmer.devices.sensors import Infrared, Ultrasonic
+from simmer.devices.tof import TimeOfFlight
 
 if TYPE_CHECKING:
     from simmer.devices.base import Device
@@ -42,6 +44,23 @@ def device_mount(device: Device, sim: Simulation) -> dict[str, Any]:
             min_range=s.min_range,
             max_range=s.max_range,
             num_rays=s.num_rays,
+        )
+    elif isinstance(device, TimeOfFlight):
+        mount.update(
+            height=device.height(sim),
+            fov=device.fov,
+            max_range=device.max_range,
+            num_rays=device.settings.num_rays,
+            out_of_range=device.out_of_range,
+            units=device.settings.units,
+        )
+    elif isinstance(device, Encoder):
+        e = device.settings
+        mount.update(
+            wheel=e.wheel,
+            track_width=e.track_width,
+            wheel_diameter=e.wheel_diameter,
+            counts_per_rev=e.counts_per_rev,
         )
     elif isinstance(device, Infrared):
         floor = device.settings
