@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pygame
+import pytest
 
 from simmer import Simulation
 from simmer.ui import Bridge, Window
@@ -23,6 +24,7 @@ def magenta_pixels(window: Window) -> int:
     return int(np.all(pixels == MAGENTA, axis=2).sum())
 
 
+@pytest.mark.slow  # a window and three full draws: about a second
 def test_the_window_draws_the_beam_after_a_read_and_not_later() -> None:
     sim = Simulation.from_config(EXAMPLES / "tof_rover.toml")
     assert (MAGENTA, "time-of-flight beams") in legend(StaticScene.of(sim))

@@ -108,3 +108,25 @@ def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
     bad = runner.invoke(app, ["table", "-o", str(tmp_path / "t.txt")])
     assert bad.exit_code == 1
     assert ".npz or .csv" in bad.output
+
+
+def test_simmer_table_has_the_tof_sensors_with_their_out_of_range_value(tmp_path: Path) -> None:
+    npz = tmp_path / "tof.npz"
+    config = str(EXAMPLES / "tof_rover.toml")
+    result = CliRunner().invoke(
+        app, ["table", config, "--step", "6", "--headings", "0:360:90", "-o", str(npz)]
+    )
+    assert result.exit_code == 0, result.output
+    data = np.load(npz)
+    assert list(data["sensors"]) == ["t0", "t1", "t2"]
+    readings = data["readings"]
+    nose, sides = readings[..., 0], readings[..., 1:]
+    assert (nose == 8190.0).any()  # a VL53L0X with nothing within 1.2 m
+    near = sides[np.isfinite(sides)]
+    assert near.size
+    assert np.all(near == np.round(near))  # whole millimetres
+    sim = Simulation.from_config(EXAMPLES / "tof_rover.toml")
+    i, j, k = 3, 2, 1
+    pose = [data["x"][j], data["y"][i], data["headings"][k]]
+    wanted = sim.expected(pose, block=False)[0].astype(readings.dtype)
+    np.testing.assert_array_equal(readings[i, j, k], wanted)

@@ -37,7 +37,8 @@ def table(
 ) -> None:
     """Write the readings each sensor gives with its noise off at every position (every STEP
     inches, half a step from the walls' lines) and heading, from the walls alone (no block):
-    ultrasonic, infrared and compass sensors, with the simulator's own geometry."""
+    ultrasonic, infrared, compass and time-of-flight sensors, with the simulator's own
+    geometry."""
     from rich.progress import Progress
 
     from simmer.localize.files import write_table

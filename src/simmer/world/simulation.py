@@ -502,8 +502,8 @@ class Simulation:
         self, poses: Any, sensors: Sequence[str] | None = None, *, block: bool = True
     ) -> FloatArray:
         """Noise-free readings of ``sensors`` at many robot poses ((N, 3): x, y, heading),
-        with the simulator's own geometry: (N, S), for ultrasonic, infrared and compass
-        sensors; ``block=False`` sees the walls only."""
+        with the simulator's own geometry: (N, S), for ultrasonic, infrared, compass and
+        time-of-flight sensors; ``block=False`` sees the walls only."""
         from simmer.world.expected import expected
 
         return expected(self, poses, sensors, block=block)
