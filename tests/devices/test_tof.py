@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from simmer import Simulation
+from simmer.config.overrides import with_overrides
 from simmer.devices import Segment
 from simmer.devices.tof import MM_PER_INCH, PRESETS
 from simmer.errors import ConfigError
@@ -161,3 +163,13 @@ def test_the_map_a_program_gets_has_the_tof_and_encoder_figures() -> None:
     assert mounts["t0"]["max_range"] == pytest.approx(1300.0 / MM_PER_INCH)
     assert (mounts["t0"]["out_of_range"], mounts["t0"]["units"]) == (-1.0, "mm")
     assert (mounts["e0"]["wheel"], mounts["e0"]["counts_per_rev"]) == ("right", 1440.0)
+
+
+def test_a_sweeps_override_of_the_mode_is_checked_as_a_file_is() -> None:
+    data = default_data()
+    data["sensors"]["t0"] = {"type": "tof", "rotation": 90, **NARROW}
+    config = make_config(data)
+    longer = with_overrides(config, {"sensors.t0.mode": "long_range"})
+    assert Simulation(longer).command("t0") == [pytest.approx(CORRIDOR, abs=1e-9)]
+    with pytest.raises(ConfigError, match=r"sensors\.t0\.mode.*'high_speed', 'long_range'"):
+        with_overrides(config, {"sensors.t0.mode": "long"}, "the sweep")
