@@ -180,3 +180,19 @@ def test_a_blocked_robot_turns_no_wheel() -> None:
     sim.run_until_idle()
     left, _ = sim.command("e0,e1")
     assert left == counts(42.0 - sim.robot.pose.y)
+
+
+@pytest.mark.slow
+def test_forty_stationary_imus_drift_apart_as_their_bias_walk_says_over_ten_minutes() -> None:
+    ids = [f"{letter}{digit}" for letter in "jkqz" for digit in range(10)]
+    walk = QUIET_IMU | {"gyro_bias": 0.5, "gyro_bias_walk": 0.01, "accel_bias_walk": [0.05, 0.0]}
+    sim = sim_with(seed=9, **dict.fromkeys(ids, walk))
+    sim.step(36_000)  # ten simulated minutes standing still
+    rates = np.array(sim.command(",".join(f"{i}-0" for i in ids)))
+    accels = np.array(sim.command(",".join(f"{i}-1" for i in ids)))
+    # after T seconds each bias has moved by a normal of sd walk * sqrt(T) from its start; the
+    # spread of 40 such has a relative error of about 1 / sqrt(80) = 11 %: 35 % is 3 of them
+    assert rates.std() == pytest.approx(0.01 * math.sqrt(600.0), rel=0.35)
+    assert accels.std() == pytest.approx(0.05 * math.sqrt(600.0), rel=0.35)
+    assert abs(rates.mean() - 0.5) < 4 * 0.01 * math.sqrt(600.0) / math.sqrt(40)
+    assert np.all(np.array(sim.command(",".join(f"{i}-2" for i in ids))) == 0.0)
