@@ -96,7 +96,8 @@ def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
             app, ["table", "--step", "8", "--headings", "0:360:90", "-o", str(path)]
         )
         assert result.exit_code == 0, result.output
-    data = np.load(npz)
+    with np.load(npz) as table_file:  # closed at once: an open file warns in a later test
+        data = {name: table_file[name] for name in table_file.files}
     assert list(data["sensors"]) == ["u0", "u1", "u2", "u3"]
     rows = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert csv.read_text().splitlines()[0] == "x,y,heading,u0,u1,u2,u3"
@@ -117,7 +118,8 @@ def test_simmer_table_has_the_tof_sensors_with_their_out_of_range_value(tmp_path
         app, ["table", config, "--step", "6", "--headings", "0:360:90", "-o", str(npz)]
     )
     assert result.exit_code == 0, result.output
-    data = np.load(npz)
+    with np.load(npz) as table_file:  # closed at once: an open file warns in a later test
+        data = {name: table_file[name] for name in ("sensors", "readings", "x", "y", "headings")}
     assert list(data["sensors"]) == ["t0", "t1", "t2"]
     readings = data["readings"]
     nose, sides = readings[..., 0], readings[..., 1:]
