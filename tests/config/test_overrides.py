@@ -12,7 +12,7 @@ from simmer.errors import ConfigError
 
 from helpers import EXAMPLES, noisy_config
 
-TOF_ROVER = EXAMPLES / "tof_rover.toml"
+BUMPER_ROVER = EXAMPLES / "bumper_rover.toml"
 
 
 def test_a_loaded_configuration_takes_device_overrides_too() -> None:
@@ -34,10 +34,12 @@ def test_an_override_is_checked_as_a_file_is() -> None:
 
 
 def test_a_plugin_device_takes_overrides_as_a_sweep_gives_them() -> None:
-    loaded = load_config(TOF_ROVER)
-    changed = with_overrides(loaded, {"sensors.t0.max_range": 20.0})
-    assert changed.device("t0").params.max_range == 20.0  # type: ignore[attr-defined]
+    loaded = load_config(BUMPER_ROVER)
+    changed = with_overrides(loaded, {"sensors.b0.reach": 2.0})
+    assert changed.device("b0").params.reach == 2.0  # type: ignore[attr-defined]
     assert changed.kinds == loaded.kinds  # its plug-in's kind, found again
-    data, original = read_config_data(TOF_ROVER)
-    apply_overrides(data, [("sensors.t0.max_range", 20.0)])
-    assert config_from_dict(data, str(TOF_ROVER), TOF_ROVER.parent, original=original) == changed
+    data, original = read_config_data(BUMPER_ROVER)
+    apply_overrides(data, [("sensors.b0.reach", 2.0)])
+    assert (
+        config_from_dict(data, str(BUMPER_ROVER), BUMPER_ROVER.parent, original=original) == changed
+    )

@@ -28,7 +28,7 @@ from simmer.errors import ConfigError, DeviceKindError
 from helpers import EXAMPLES, REPO, default_data, make_config
 
 # Make sure the example plug-in is registered before the parametrisation below is collected.
-Simulation.from_config(EXAMPLES / "tof_rover.toml")
+Simulation.from_config(EXAMPLES / "bumper_rover.toml")
 
 
 @pytest.mark.parametrize("name", sorted(device_kinds()))
@@ -83,22 +83,23 @@ def test_interface_checker_names_what_is_missing() -> None:
         check_device_kind(object)
 
 
-def test_plugin_kind_from_configuration_reads_the_wall() -> None:
-    sim = Simulation.from_config(EXAMPLES / "tof_rover.toml")
-    # t0 sits on the nose, 4 in ahead of (6, 42), facing the top wall.
-    assert sim.command("t0") == pytest.approx([38.0], abs=1e-9)
-    sim.command("w0-30")
+def test_plugin_kind_from_configuration_feels_the_wall() -> None:
+    sim = Simulation.from_config(EXAMPLES / "bumper_rover.toml")
+    # b0 sits on the nose, 4 in ahead of (6, 42), facing the top wall 38 in away.
+    assert sim.command("b0") == [0.0]
+    sim.command("w0-37.9")  # the bar 0.1 in from the wall: within its reach of 0.25 in
     sim.run_until_idle()
-    assert sim.command("t0") == pytest.approx([8.0], abs=1e-9)
+    assert sim.command("b0") == [1.0]
+    sim.command("w0--0.2")  # 0.3 in: out of reach again
+    sim.run_until_idle()
+    assert sim.command("b0") == [0.0]
 
 
 def test_plugin_settings_are_validated(tmp_path: Path) -> None:
     shutil.copytree(EXAMPLES / "devices", tmp_path / "devices")
-    path = tmp_path / "bad_tof.toml"
-    path.write_text((EXAMPLES / "tof_rover.toml").read_text() + "max_rang = 3\n")
-    with pytest.raises(
-        ConfigError, match=r"sensors\.t0\.max_rang: unknown key \(did you mean 'max_range'"
-    ):
+    path = tmp_path / "bad_bumper.toml"
+    path.write_text((EXAMPLES / "bumper_rover.toml").read_text() + "reac = 3\n")
+    with pytest.raises(ConfigError, match=r"sensors\.b0\.reac: unknown key \(did you mean 'reach'"):
         Simulation.from_config(path)
 
 

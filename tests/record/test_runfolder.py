@@ -34,6 +34,7 @@ from simmer.record import (
     write_report_md,
 )
 from simmer.record.eventlog import TYPE_NAMES, event_from_dict, event_line
+from simmer.record.plots import read_run, sensor_panels
 from simmer.record.runfolder import project_lines
 from simmer.record.trace import POSE_COLUMNS
 from simmer.world.events import (
@@ -116,7 +117,7 @@ def test_a_different_seed_replays_to_a_different_trace(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     "path",
-    [EXAMPLES / "tof_rover.toml", SIMMER_PY / "lab_rover_noisy.py", None],
+    [EXAMPLES / "bumper_rover.toml", SIMMER_PY / "lab_rover_noisy.py", None],
     ids=["plug-in", "config.py", "built-in"],
 )
 def test_the_manifest_rebuilds_the_configuration(tmp_path: Path, path: Path | None) -> None:
@@ -383,3 +384,25 @@ def test_report_md_project_lines_take_only_what_is_well_formed() -> None:
     assert "**Score: 30** (the rubric is in the manifest)." in good
     hostile = project_lines({"score": "x", "wrong_zone": 5}, {"start": "here", "block": None})
     assert not any("Started" in line or "Score" in line or "another" in line for line in hostile)
+
+
+def test_an_imus_axes_are_columns_of_their_own_and_plotted_by_unit(tmp_path: Path) -> None:
+    config = load_config(EXAMPLES / "motion_rover.toml")
+    sim = Simulation(config, seed=4)
+    folder = tmp_path / "run"
+    with RunRecorder(sim, folder):
+        sim.command("w0-6")
+        sim.step(20)
+        replies = sim.command("i0-2,e0-1,i0,i0-1,i0-7,e1")
+        sim.step(4)
+    rows = trace_rows(folder / "trace.csv")
+    assert list(rows[0])[len(POSE_COLUMNS) :] == ["i0", "i0-1", "i0-2", "e0", "e1"]
+    last = rows[-1]
+    got = [float(last[c]) for c in ("i0-2", "e0", "i0", "i0-1", "e1")]
+    assert got == pytest.approx([replies[0], replies[1], replies[2], replies[3], replies[5]])
+    assert math.isnan(replies[4])  # i0-7: no such axis, and no column
+    assert sensor_panels(read_run(folder)) == [
+        ("imu: yaw rate (°/s)", ["i0"]),
+        ("imu: acceleration (in/s²)", ["i0-1", "i0-2"]),
+        ("encoder: wheel counts", ["e0", "e1"]),
+    ]

@@ -21,12 +21,17 @@ pytestmark = pytest.mark.timeout(180)
 
 
 def quiet_default() -> Simulation:
-    """examples/simmer_default.toml (ultrasonic, gyroscope, compass, infrared) with no noise."""
+    """examples/simmer_default.toml (ultrasonic, gyroscope, compass, infrared) with no noise,
+    and three time-of-flight sensors (above the block, the other preset, millimetres)."""
     data = tomllib.loads((EXAMPLES / "simmer_default.toml").read_text(encoding="utf-8"))
     for sensor in data["sensors"].values():
         if "error" in sensor:
             sensor["error"] = 0.0
     data["sensors"]["c0"]["bias"] = 7.5  # a compass's bias is part of its noise-free reading
+    quiet = {"type": "tof", "error": 0.0, "error_constant": 0.0}
+    data["sensors"]["t0"] = quiet | {"position": [0, 2], "height": 4.0}
+    data["sensors"]["t1"] = quiet | {"position": [1, 0, 2], "rotation": -60, "preset": "vl53l1x"}
+    data["sensors"]["t2"] = quiet | {"rotation": 120, "units": "mm", "mode": "long_range"}
     return Simulation(make_config(data), seed=3)
 
 
@@ -91,7 +96,8 @@ def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
             app, ["table", "--step", "8", "--headings", "0:360:90", "-o", str(path)]
         )
         assert result.exit_code == 0, result.output
-    data = np.load(npz)
+    with np.load(npz) as table_file:  # closed at once: an open file warns in a later test
+        data = {name: table_file[name] for name in table_file.files}
     assert list(data["sensors"]) == ["u0", "u1", "u2", "u3"]
     rows = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert csv.read_text().splitlines()[0] == "x,y,heading,u0,u1,u2,u3"
@@ -103,3 +109,26 @@ def test_simmer_table_writes_npz_and_csv_that_agree(tmp_path: Path) -> None:
     bad = runner.invoke(app, ["table", "-o", str(tmp_path / "t.txt")])
     assert bad.exit_code == 1
     assert ".npz or .csv" in bad.output
+
+
+def test_simmer_table_has_the_tof_sensors_with_their_out_of_range_value(tmp_path: Path) -> None:
+    npz = tmp_path / "tof.npz"
+    config = str(EXAMPLES / "tof_rover.toml")
+    result = CliRunner().invoke(
+        app, ["table", config, "--step", "6", "--headings", "0:360:90", "-o", str(npz)]
+    )
+    assert result.exit_code == 0, result.output
+    with np.load(npz) as table_file:  # closed at once: an open file warns in a later test
+        data = {name: table_file[name] for name in ("sensors", "readings", "x", "y", "headings")}
+    assert list(data["sensors"]) == ["t0", "t1", "t2"]
+    readings = data["readings"]
+    nose, sides = readings[..., 0], readings[..., 1:]
+    assert (nose == 8190.0).any()  # a VL53L0X with nothing within 1.2 m
+    near = sides[np.isfinite(sides)]
+    assert near.size
+    assert np.all(near == np.round(near))  # whole millimetres
+    sim = Simulation.from_config(EXAMPLES / "tof_rover.toml")
+    i, j, k = 3, 2, 1
+    pose = [data["x"][j], data["y"][i], data["headings"][k]]
+    wanted = sim.expected(pose, block=False)[0].astype(readings.dtype)
+    np.testing.assert_array_equal(readings[i, j, k], wanted)

@@ -37,8 +37,9 @@ def table(
 ) -> None:
     """Write the readings each sensor gives with its noise off at every position (every STEP
     inches, half a step from the walls' lines) and heading, from the walls alone (no block):
-    ultrasonic, infrared and compass sensors, with the simulator's own geometry. A LiDAR
-    (--sensor l0, alone): its scans at heading 0, which every heading rotates."""
+    ultrasonic, infrared, compass and time-of-flight sensors, with the simulator's own
+    geometry. A LiDAR (--sensor l0, alone): its scans at heading 0, which every heading
+    rotates."""
     from rich.progress import Progress
 
     from simmer.localize.files import lidar_table, write_table

@@ -222,10 +222,6 @@ def _link(config: SimConfig) -> str:
     )
 
 
-LIDAR_NOISE = ("range_error", "range_error_proportional", "angular_jitter", "dropout")
-"""A LiDAR's noise settings (:mod:`simmer.devices.lidar`), each counted as ``error`` is."""
-
-
 def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
     """The devices with noise switched on, and which of their settings (``error``, ``bias``)
     are not zero; drive biases drawn at start (``rand_bias``) count as each drive's bias."""
@@ -233,7 +229,12 @@ def noisy_devices(config: SimConfig) -> dict[str, list[str]]:
     drawn = settings.rand_bias and any(settings.bias_strength)
     found: dict[str, list[str]] = {}
     for spec in config.devices:
-        for name in ("error", "bias", *LIDAR_NOISE):
+        own = getattr(spec.params, "noise_keys", None)
+        if callable(own):  # a kind whose noise settings have other names (lidar, tof, imu, encoder)
+            if names := own():
+                found[spec.id] = names
+            continue
+        for name in ("error", "bias"):
             value = getattr(spec.params, name, 0.0)
             values = value.model_dump().values() if isinstance(value, BaseModel) else [value]
             if any(v != 0 for v in values) or (drawn and name == "bias" and spec.group == "drives"):

@@ -15,6 +15,7 @@ from simmer.devices.base import (
 )
 from simmer.devices.drive import Axes, Drive, DriveParams, Motion
 from simmer.devices.lidar import Lidar, LidarParams
+from simmer.devices.motion import Encoder, EncoderParams, Imu, ImuParams
 from simmer.devices.motor import Motor, MotorParams
 from simmer.devices.registry import (
     DeviceKinds,
@@ -33,6 +34,7 @@ from simmer.devices.sensors import (
     Ultrasonic,
     UltrasonicParams,
 )
+from simmer.devices.tof import TimeOfFlight, TimeOfFlightParams
 from simmer.geometry import heading_vector
 from simmer.pose import Vec2
 
@@ -46,8 +48,12 @@ __all__ = [
     "DeviceParams",
     "Drive",
     "DriveParams",
+    "Encoder",
+    "EncoderParams",
     "Gyroscope",
     "GyroscopeParams",
+    "Imu",
+    "ImuParams",
     "Infrared",
     "InfraredParams",
     "Lidar",
@@ -57,6 +63,8 @@ __all__ = [
     "MotorParams",
     "Segment",
     "Shape",
+    "TimeOfFlight",
+    "TimeOfFlightParams",
     "Ultrasonic",
     "UltrasonicParams",
     "Vec2",

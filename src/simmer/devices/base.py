@@ -152,6 +152,10 @@ class RobotView(Protocol):
     """Where the robot started (a LiDAR's first scan is made there)."""
     turned: float
     """Degrees turned during the last step (what a gyroscope senses)."""
+    moved: Vec2
+    """Inches moved during the last step, in the robot's frame at the step's start (x toward
+    the robot's left as the window shows it, y ahead; an IMU and an encoder sense it); 0 in a
+    step the robot was blocked or placed by hand."""
     height: float
     outline: FloatArray
     devices: dict[str, Device]
@@ -224,6 +228,10 @@ class Device:
     kind: ClassVar[str] = ""
     Params: ClassVar[type[DeviceParams]] = DeviceParams
     default_outline: ClassVar[FloatArray] = rectangle(1.0, 1.0)
+    readings: ClassVar[tuple[str, ...]] = ("",)
+    """What its commands read, each a column of a run's trace named by the id and this suffix:
+    one reading (``""``) for most kinds; an IMU's three axes (``"", "-1", "-2"``: ``i0``,
+    ``i0-1``, ``i0-2``)."""
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         self.id = device_id

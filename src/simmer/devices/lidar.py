@@ -97,6 +97,11 @@ class LidarParams(MeasuredParams):
             )
         return found
 
+    def noise_keys(self) -> list[str]:
+        """The noise settings in effect that are not zero (``simmer check``'s summary)."""
+        names = ("range_error", "range_error_proportional", "angular_jitter", "dropout")
+        return [name for name in names if getattr(self, name)]
+
 
 class Lidar(Device):
     """A spinning 2D LiDAR modelled on the RPLidar A1M8, a whole scan a revolution: ``l0-A``

@@ -1,12 +1,12 @@
 """Plug-ins loaded for one configuration, without touching the process's import machinery.
 
-A configuration's plug-in (``plugins = ["devices/tof.py"]``, or an installed module's name) is
+A configuration's plug-in (``plugins = ["devices/bumper.py"]``, or an installed module's name) is
 loaded once per process: a file runs as the module ``simmer_plugin_<stem>_<code>``, where
 ``<code>`` spells the file's absolute path (in lower-case base32), so its name is the same in
 every process (a name from Python's ``hash`` would not do: it is salted per process). The kinds
 it registers while it runs (:func:`simmer.devices.register_device_kind`) are collected for the
 configuration naming it, not put in the process-wide registry, so two configurations may each
-have their own kind called ``"tof"``.
+have their own kind called ``"bumper"``.
 
 The module is in :data:`sys.modules` only while its file runs (what it defines may look itself
 up there), and no finder is installed. An instance of a plug-in's device or settings class

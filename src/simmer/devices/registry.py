@@ -40,6 +40,9 @@ BUILTIN_KINDS = {
     "infrared": "simmer.devices.sensors:Infrared",
     "gripper": "simmer.devices.gripper:Gripper",
     "lidar": "simmer.devices.lidar:Lidar",
+    "tof": "simmer.devices.tof:TimeOfFlight",
+    "imu": "simmer.devices.motion:Imu",
+    "encoder": "simmer.devices.motion:Encoder",
     # a device class written for the original SimMeR
     "simmer_device": "simmer.compat.template:SimmerDevice",
 }

@@ -12,7 +12,9 @@ from typing import TYPE_CHECKING, Any
 from simmer.config.maze import robot_outline
 from simmer.config.project import GenerateSettings
 from simmer.devices.lidar import Lidar
+from simmer.devices.motion import Encoder
 from simmer.devices.sensors import Infrared, Ultrasonic
+from simmer.devices.tof import TimeOfFlight
 
 if TYPE_CHECKING:
     from simmer.devices.base import Device
@@ -53,6 +55,23 @@ def device_mount(device: Device, sim: Simulation) -> dict[str, Any]:
             scan_rate=scanner.scan_rate,
             min_range=scanner.min_range,
             max_range=scanner.max_range,
+        )
+    elif isinstance(device, TimeOfFlight):
+        mount.update(
+            height=device.height(sim),
+            fov=device.fov,
+            max_range=device.max_range,
+            num_rays=device.settings.num_rays,
+            out_of_range=device.out_of_range,
+            units=device.settings.units,
+        )
+    elif isinstance(device, Encoder):
+        e = device.settings
+        mount.update(
+            wheel=e.wheel,
+            track_width=e.track_width,
+            wheel_diameter=e.wheel_diameter,
+            counts_per_rev=e.counts_per_rev,
         )
     elif isinstance(device, Infrared):
         floor = device.settings

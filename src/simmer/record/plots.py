@@ -94,6 +94,11 @@ SENSOR_UNITS = {
     "infrared": "floor (1 white, 0 black)",
     "compass": "heading (°)",
     "gyroscope": "angle turned (°)",
+    "tof": "distance (in, or mm)",
+    "imu": "yaw rate (°/s)",
+    "imu-1": "acceleration (in/s²)",
+    "imu-2": "acceleration (in/s²)",
+    "encoder": "wheel counts",
 }
 """What the built-in sensor kinds read, for the y axis of their panel."""
 LOCALIZATION_IMAGE = "localization.png"
@@ -836,9 +841,11 @@ def sensor_panels(run: RecordedRun) -> list[tuple[str, list[str]]]:
     kind the manifest names, else one per id prefix (the letters before the digits)."""
     panels: dict[str, list[str]] = {}
     for name in run.trace.sensors:
-        kind = run.kinds.get(name)
+        device, dash, suffix = name.partition("-")  # an IMU's axis: i0-1
+        kind = run.kinds.get(name) or run.kinds.get(device)
         if kind is not None:
-            label = f"{kind}: {SENSOR_UNITS.get(kind, 'reading')}"
+            unit = SENSOR_UNITS.get(kind + dash + suffix) or SENSOR_UNITS.get(kind, "reading")
+            label = f"{kind}: {unit}"
         else:
             prefix = re.match(r"\D*", name)
             label = f"{prefix.group() if prefix else name}…: reading"

@@ -126,8 +126,14 @@ def prepare_folder(folder: str | Path) -> Path:
 
 
 def sensor_ids(config: SimConfig) -> list[str]:
-    """The sensors' ids, in configuration order: the trace's sensor columns."""
-    return [spec.id for spec in config.devices if spec.group == "sensors"]
+    """The trace's sensor columns, in configuration order: each sensor's id, and for a kind
+    with several readings (an IMU's axes) its id with each reading's suffix (``i0-1``)."""
+    columns = []
+    for spec in config.devices:
+        if spec.group == "sensors":
+            kind = config.kinds.get(spec.kind)
+            columns += [spec.id + suffix for suffix in (kind.readings if kind else ("",))]
+    return columns
 
 
 def config_to_manifest(config: SimConfig) -> dict[str, Any]:

@@ -35,7 +35,7 @@ from contextlib import suppress
 from pathlib import Path
 
 from simmer.geometry import Pose
-from simmer.protocol import command_ids
+from simmer.protocol import command_ids, parse_command
 from simmer.record.eventlog import RecordingBudget, stop_reason
 from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
 
@@ -53,6 +53,18 @@ HELD_SECONDS = 1.0
 """Simulated seconds of rows held before they are written, at most: what ``kill -9`` loses."""
 MAX_MESSAGES = 1024
 """Distinct messages whose sensor columns are remembered (a program repeats a few)."""
+
+
+def _reading_columns(message: str, ids: list[str], columns: dict[str, int]) -> list[str]:
+    """The column each command of ``message`` fills: its id, or for a sensor with several
+    readings (``i0-1`` is a column: an IMU's axis) its id and the command's value."""
+    if not any(f"{i}-1" in columns for i in ids):
+        return ids
+    named = []
+    for device, text in zip(ids, message.strip().split(","), strict=True):
+        value = parse_command(text).value if f"{device}-1" in columns else 0.0
+        named.append(device if value == 0.0 else f"{device}-{value:g}")  # i0-7: no column
+    return named
 
 
 def trace_columns(sensors: Sequence[str]) -> list[str]:
@@ -137,7 +149,11 @@ class TraceWriter:
         columns = self._columns_of.get(event.message)
         if columns is None:
             ids = command_ids(event.message)
-            columns = tuple((i, self._column[d]) for i, d in enumerate(ids) if d in self._column)
+            columns = tuple(
+                (i, self._column[d])
+                for i, d in enumerate(_reading_columns(event.message, ids, self._column))
+                if d in self._column
+            )
             if len(self._columns_of) >= MAX_MESSAGES:
                 self._columns_of.clear()
             self._columns_of[event.message] = columns

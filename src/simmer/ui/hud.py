@@ -105,6 +105,11 @@ def legend(scene: HasScene) -> list[tuple[Color, str]]:
         if color is not None:
             items.append((color, "ultrasonic rays"))
             break
+    for spec in config.devices:
+        color = getattr(spec.params, "beam_color", None)
+        if color is not None:
+            items.append((color, "time-of-flight beams"))
+            break
     items.append((TRAIL_COLOR, "path so far (T)"))
     return items
 

@@ -1,10 +1,11 @@
 """Noise-free readings at many poses at once, with the simulator's own geometry.
 
-:func:`expected` answers for ultrasonic, infrared and compass sensors exactly what each reads
-with its noise off (the same ray-casting and floor kernels, :mod:`simmer.geometry`). Gyroscopes
-(they integrate turns: no function of the pose), motors, drives and device kinds of your own
-are refused by name. The ultrasonic fans are cast in parallel over the poses (Numba
-``prange``), so a lookup table of millions of poses takes seconds (:func:`table`).
+:func:`expected` answers for ultrasonic, infrared, compass and time-of-flight sensors and
+LiDARs exactly what each reads with its noise off (the same ray-casting and floor kernels,
+:mod:`simmer.geometry`). Gyroscopes, IMUs and encoders (they sense motion: no function of the
+pose), motors, drives and device kinds of your own are refused by name. The ultrasonic fans
+are cast in parallel over the poses (Numba ``prange``), so a lookup table of millions of poses
+takes seconds (:func:`table`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 
 from simmer.devices.lidar import Lidar
 from simmer.devices.sensors import _DISK, Compass, Infrared, Ultrasonic
+from simmer.devices.tof import MM_PER_INCH, TimeOfFlight
 from simmer.geometry import (
     BoolArray,
     FloatArray,
@@ -30,8 +32,10 @@ from simmer.geometry import (
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
 
-SUPPORTED = ("ultrasonic", "infrared", "compass", "lidar")
+SUPPORTED = ("ultrasonic", "infrared", "compass", "tof", "lidar")
 """Sensor kinds :func:`expected` answers for (a LiDAR only when named: a column per beam)."""
+POSE_SENSORS = (Ultrasonic, Infrared, Compass, TimeOfFlight)
+"""The sensors whose one reading is a function of the pose: the default columns."""
 
 
 @numba.njit(cache=True, nogil=True, parallel=True)
@@ -176,7 +180,7 @@ def expected(
     array = _as_poses(poses)
     devices = sim.robot.sensors
     if sensors is None:
-        sensors = [i for i, d in devices.items() if isinstance(d, Ultrasonic | Infrared | Compass)]
+        sensors = [i for i, d in devices.items() if isinstance(d, POSE_SENSORS)]
     found = []
     for sensor_id in sensors:
         device = devices.get(sensor_id)
@@ -240,6 +244,8 @@ def _column(sim: Simulation, device: Any, poses: FloatArray, block: bool) -> Flo
             s.num_rays,
             column,
         )
+    elif isinstance(device, TimeOfFlight):
+        _tof_column(sim, device, poses, block, column)
     elif isinstance(device, Infrared):
         maze = sim.maze
         mount = np.array([*device.position, device.radius, device.settings.threshold])
@@ -254,6 +260,34 @@ def _column(sim: Simulation, device: Any, poses: FloatArray, block: bool) -> Flo
             "sensors (a gyroscope integrates turns, so its reading is no function of the pose)"
         )
     return column
+
+
+def _tof_column(
+    sim: Simulation, device: TimeOfFlight, poses: FloatArray, block: bool, column: FloatArray
+) -> None:
+    """A time-of-flight sensor's noise-free readings: the ultrasonic fan kernel over its cone
+    (no lower clamp), then the driver's out-of-range value and the sensor's units."""
+    maze, cube = sim.maze, sim.block
+    above = device.height(sim) - cube.size
+    mount = np.array([*device.position, device.rotation, device.fov, 0.0, device.max_range, above])
+    where = np.array([cube.x, cube.y, 1.0 if block else 0.0])
+    _fans(
+        maze.hwall,
+        maze.vwall,
+        maze.cell,
+        maze.segments,
+        cube.segments,
+        where,
+        poses,
+        mount,
+        device.settings.num_rays,
+        column,
+    )
+    units = device.settings.units
+    reach = column >= device.max_range
+    if units == "mm":
+        column[:] = np.round(column * MM_PER_INCH)  # as in_units rounds
+    column[reach] = device.out_of_range
 
 
 # ----------------------------------------------------------------------------- tables
@@ -328,11 +362,7 @@ def table(
     """
     xs, ys = grid(sim, step)
     if sensors is None:
-        sensors = [
-            i
-            for i, d in sim.robot.sensors.items()
-            if isinstance(d, Ultrasonic | Infrared | Compass)
-        ]
+        sensors = [i for i, d in sim.robot.sensors.items() if isinstance(d, POSE_SENSORS)]
     sensors = list(sensors)
     total = len(xs) * len(ys) * len(headings) * max(1, len(sensors))
     if total > MAX_TABLE_VALUES:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from simmer.devices import Device, Drive, Motor
-from simmer.geometry import FloatArray, Pose, place_polygon
+from simmer.geometry import FloatArray, Pose, Vec2, place_polygon
 
 
 class Robot:
@@ -16,6 +16,7 @@ class Robot:
         self.start_pose = pose
         self.pose = pose
         self.turned = 0.0  # degrees turned during the last step (what a gyroscope senses)
+        self.moved = Vec2(0.0, 0.0)  # robot-frame inches moved in the last step (an encoder's)
         self.height = height
         self.devices: dict[str, Device] = {device.id: device for device in devices}
         self.motors: dict[str, Motor] = {d.id: d for d in devices if isinstance(d, Motor)}

@@ -29,6 +29,7 @@ from simmer.errors import CommandError, DeviceKindError, WrongThread, describe_e
 from simmer.geometry import (
     FloatArray,
     Pose,
+    Vec2,
     place_polygon,
     polygon_hits_grid,
     robot_blocked,
@@ -57,6 +58,8 @@ device included); it switches that device off. Ctrl-C still stops everything."""
 MANUAL_SPEED = 6.0  # in/s, BEHAVIOUR §3
 MANUAL_TURN = 120.0  # deg/s
 MANUAL_KEYS = "wasdqe"
+STILL = Vec2(0.0, 0.0)
+"""The robot's motion in a step in which it did not move."""
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -320,6 +323,7 @@ class Simulation:
         dx = dy = rotation = 0.0
         moved = False
         robot.turned = 0.0
+        robot.moved = STILL
         if self.manual_keys:
             dx, dy, rotation = self._manual_motion(dt)
             moved = True
@@ -415,6 +419,7 @@ class Simulation:
                 self.emit(CollisionEndEvent(self._time, target, self.steps))
         robot.pose = target
         robot.turned = rotation
+        robot.moved = Vec2(dx, dy)
         block = self._block
         if block.held is not None:  # _blocked placed its outline at the target
             block.carry_to(block.carried_pose(target), self._carried)
@@ -504,8 +509,8 @@ class Simulation:
         self, poses: Any, sensors: Sequence[str] | None = None, *, block: bool = True
     ) -> FloatArray:
         """Noise-free readings of ``sensors`` at many robot poses ((N, 3): x, y, heading),
-        with the simulator's own geometry: (N, S), for ultrasonic, infrared and compass
-        sensors; ``block=False`` sees the walls only."""
+        with the simulator's own geometry: (N, S), for ultrasonic, infrared, compass and
+        time-of-flight sensors; ``block=False`` sees the walls only."""
         from simmer.world.expected import expected
 
         return expected(self, poses, sensors, block=block)
