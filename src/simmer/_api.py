@@ -31,6 +31,7 @@ INTERNAL = (
     "simmer.config",
     "simmer.console",
     "simmer.geometry",
+    "simmer.grade",
     "simmer.lazy",
     "simmer.localize",
     "simmer.lockstep",
