@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -30,6 +30,10 @@ if TYPE_CHECKING:
 
 __all__ = ["GradeResult", "grade_columns", "run_grading"]
 
+STOPPED_AT_LIMIT = frozenset({RunEnd.SECONDS, RunEnd.TIMEOUT})
+"""Ends of a run whose output tail a grading does not keep: the program was stopped, and
+what it printed as it was (a traceback of the closed link, or nothing) depends on timing, so
+the same grading would not give the same table."""
 TAIL = ("status", "exit_status", "wall_time", "run", "folder", "detail")
 
 
@@ -81,6 +85,8 @@ def run_grading(
             with _progress(console, "grading", len(runs), len(runs) - len(todo)) as advance:
 
                 def record(run: RunSpec, result: RunResult) -> None:
+                    if result.status in STOPPED_AT_LIMIT:  # what it printed as it was stopped
+                        result = replace(result, detail="")  # depends on timing: not kept
                     kept = (
                         keep_files(folder, names[run.key()], result.files) if result.files else ""
                     )

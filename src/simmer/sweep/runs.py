@@ -375,6 +375,7 @@ def _run_program(
         from simmer.lockstep.box import Box, make_box
 
         box = Box(run.box, *make_box(Path(run.folder), extras.scratch))
+        output.hidden.append(f"{box.work}{os.sep}")  # its traceback names robot.py, not where
     options = RunOptions.free_ports(
         speed=None,
         clock="lockstep",
@@ -585,6 +586,9 @@ class _OutputTail:
         self._thread: threading.Thread | None = None
         self._tail = bytearray()
         self._lock = threading.Lock()
+        self.hidden: list[str] = []
+        """Text taken out of the tail (a box's scratch folder: the same run's tail is the
+        same wherever it ran)."""
 
     @property
     def writing(self) -> int:
@@ -625,4 +629,7 @@ class _OutputTail:
             if not self._thread.is_alive():
                 os.close(reading)
         with self._lock:
-            return bytes(self._tail).decode("utf-8", errors="replace").strip()[-STDERR_TAIL:]
+            text = bytes(self._tail).decode("utf-8", errors="replace")
+        for hidden in self.hidden:
+            text = text.replace(hidden, "")
+        return text.strip()[-STDERR_TAIL:]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 PYTHON = "/usr/bin/python3" if os.name == "posix" and os.getuid() == 0 else "python3"
 """As root a box runs as a user of its own, who may not read root's home (a pyenv there)."""
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 GOOD = (EXAMPLES / "project_delivery.py").read_text(encoding="utf-8")
 SLOW_TRANSMIT = (
     "def transmit(data):\n    time.sleep(0.5)  # a slow team: it waits before each command\n"
@@ -32,7 +32,7 @@ def programs() -> dict[str, str]:
     crash = GOOD.replace(
         '        raise SystemExit("the gripper closed on nothing")\n', CRASH_AFTER_PICKUP, 1
     )
-    assert slow != GOOD and crash != GOOD
+    assert GOOD not in (slow, crash)
     return {"Hang": HANG, "Crash": crash, "Slow": slow, "Good": GOOD}
 
 
