@@ -3,6 +3,7 @@ program (plain two-port sockets, an ``input()`` prompt for the target) and three
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from pathlib import Path
@@ -36,7 +37,13 @@ def programs() -> dict[str, str]:
     return {"Hang": HANG, "Crash": crash, "Slow": slow, "Good": GOOD}
 
 
-def grading_folder(root: Path, extra: str = "", teams: dict[str, str] | None = None) -> Path:
+def grading_folder(
+    root: Path,
+    extra: str = "",
+    teams: dict[str, str] | None = None,
+    targets: tuple[str, ...] = ("B1", "B3"),
+    wall: int = 60,
+) -> Path:
     """A grading folder: project.toml, a folder per team, GRADING.toml; the file's path."""
     root.mkdir(parents=True, exist_ok=True)
     shutil.copy(EXAMPLES / "project.toml", root / "project.toml")
@@ -44,12 +51,12 @@ def grading_folder(root: Path, extra: str = "", teams: dict[str, str] | None = N
         'config = "project.toml"',
         'answer = "{target}"',
         "seconds = 300",
-        "wall_seconds = 60",
+        f"wall_seconds = {wall}",
         'success = "delivered and collisions == 0"',
         extra,
         "[scenarios]",
         "seeds = [1]",
-        '"scenario.target" = ["B1", "B3"]',
+        '"scenario.target" = ' + json.dumps(list(targets)),
     ]
     for name, program in (teams or programs()).items():
         folder = root / "teams" / name.lower()

@@ -24,6 +24,11 @@ import os
 import sys
 from typing import Any, NoReturn
 
+try:  # here, before the box's user may be unable to read this Python's modules
+    import resource
+except ImportError:  # Windows
+    resource = None  # type: ignore[assignment]
+
 EXIT_BOX = 125
 """Exit status when the box could not be set up as asked."""
 
@@ -95,10 +100,10 @@ def _become_box_user(settings: dict[str, Any], done: list[str]) -> None:
 
 def _limit(settings: dict[str, Any], done: list[str]) -> None:
     """The resource limits (each where the system has it)."""
-    try:
-        import resource
-    except ImportError:  # Windows
-        return
+    if resource is None:
+        if os.name == "posix":
+            _fail("the resource module is missing: the limits cannot be set")
+        return  # Windows has no resource limits
     names = {
         "cpu_seconds": ("RLIMIT_CPU", 1),
         "memory_mb": ("RLIMIT_AS", 1 << 20),
