@@ -10,8 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from grade_support import GOOD, grading_folder
 
+from grade_support import GOOD, grading_folder
 from simmer.grade import load_grading, run_grading
 from simmer.lockstep.box import BOX_UID_BASE
 from simmer.proctree import descendants
@@ -42,7 +42,7 @@ LOOP = """while True:
     pass
 """
 SPY = """from pathlib import Path
-secret = Path("../good/robot.py").resolve()
+secret = Path(TARGET)
 print("trying", secret.name, flush=True)
 print(secret.read_text()[:100])
 """
@@ -91,7 +91,9 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
         "Hog": MEMORY_HOG,
         "Filler": DISK_FILLER,
         "Loop": LOOP,
-        "Spy": SPY,
+        "Spy": SPY.replace(
+            "TARGET", repr(str(tmp_path / "course" / "teams" / "good" / "robot.py"))
+        ),
     }
     spec = load_grading(
         grading_folder(tmp_path / "course", LIMITS, teams, targets=("B1",), wall=30)
