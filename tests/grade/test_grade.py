@@ -89,6 +89,9 @@ def test_four_teams_ranked_with_every_number_and_the_same_on_1_and_2_workers(
         page.index(">Good<") < page.index(">Slow<") < page.index(">Crash<") < page.index(">Hang<")
     )
     assert "simmer replay runs/Good_target=B1_seed1 runs/Good_target=B3_seed1" in page
+    side = [f"runs/{team}_target=B3_seed1" for team in ("Good", "Slow", "Crash", "Hang")]
+    assert f"simmer replay {' '.join(side)}</code>" in page  # side by side, best first
+    assert f"simmer render {' '.join(side)} -o compare-target=B3_seed1.mp4" in page
     assert (tmp_path / "one" / "teams" / "Good.png").read_bytes()[:4] == b"\x89PNG"
     # 1 and 2 workers: the same tables
     for name in ("leaderboard.csv", "leaderboard.md", "violations.csv"):

@@ -338,10 +338,51 @@ def _page(
             f"<td>{s.successes}/{s.runs}</td><td>{_shown(s.time)}</td><td>{s.collisions}</td>"
             f"<td>{s.violations}</td><td class=name>{' '.join(links)}</td></tr>"
         )
+    out += ["</table>", *_side_by_side(spec, table, rows)]
     out += [
-        "</table>",
         '<p><a href="violations.csv">Violation log</a> · <a href="results.csv">every run</a></p>',
         "</body></html>",
         "",
     ]
     return "\n".join(out)
+
+
+SIDE_BY_SIDE_SCENARIOS = 5
+"""Scenarios whose side-by-side commands the page lists (results.csv has every run)."""
+
+
+def _side_by_side(
+    spec: GradeSpec, table: Sequence[Standing], rows: Sequence[Mapping[str, str]]
+) -> list[str]:
+    """The page's commands that show the best teams' runs of a scenario side by side (in a
+    window, and as a video), for the first :data:`SIDE_BY_SIDE_SCENARIOS` scenarios."""
+    from simmer.view.compare import MAX_COMPARED
+
+    e = html.escape
+    best = [s.team.name for s in table][:MAX_COMPARED]
+    lines = []
+    for scenario in spec.scenarios[:SIDE_BY_SIDE_SCENARIOS]:
+        values = {key: str(value) for key, value in scenario.overrides}
+        runs = {
+            r["team"]: r["folder"]
+            for r in rows
+            if r["folder"]
+            and r["seed"] == str(scenario.seed)
+            and all(r[key] == value for key, value in values.items())
+        }
+        folders = [runs[name] for name in best if name in runs]
+        if len(folders) < 2:
+            continue
+        named = " ".join(folders)
+        lines.append(
+            f"<li>{e(scenario.name)}: <code>simmer replay {e(named)}</code> "
+            f"· video: <code>simmer render {e(named)} -o compare-{e(scenario.name)}.mp4</code></li>"
+        )
+    if not lines:
+        return []
+    return [
+        f"<h2>Side by side</h2><p>The best {len(best)} teams' runs of a scenario in one maze "
+        "(one colour each, a red cross once a robot collides), from this folder:</p><ul>",
+        *lines,
+        "</ul>",
+    ]
