@@ -81,6 +81,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # 7 program runs up to their limits (30 wall s): room on busy cores
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the box's limits are Linux's")
 def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
     tmp_path: Path,

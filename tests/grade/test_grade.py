@@ -26,6 +26,7 @@ def _without_wall_time(path: Path) -> list[dict[str, str]]:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # 20 program runs: ~95 s alone here, several times that on 2 busy cores
 def test_four_teams_ranked_with_every_number_and_the_same_on_1_and_2_workers(
     tmp_path: Path,
 ) -> None:
