@@ -275,7 +275,10 @@ def _teams(value: Any, folder: Path, config: Path) -> tuple[Team, ...]:
         unknown = sorted(set(entry) - TEAM_KEYS)
         if unknown:
             hints = "".join(_did_you_mean(key, TEAM_KEYS) for key in unknown)
-            raise SweepError(f"{where}: unknown key(s) {', '.join(unknown)}{hints}")
+            raise SweepError(
+                f"{where}: unknown key(s) {', '.join(unknown)}{hints}; known: name, folder, "
+                "program, config"
+            )
         name = entry.get("name")
         if not isinstance(name, str) or not name.strip() or len(name) > MAX_TEAM_NAME:
             raise SweepError(
@@ -299,6 +302,17 @@ def _teams(value: Any, folder: Path, config: Path) -> tuple[Team, ...]:
             raise SweepError(f'{where}: program, its command line ("python3 -u robot.py")')
         own = _file(entry["config"], home_path, f"{where} config") if "config" in entry else config
         teams.append(Team(name.strip(), home_path, program, own))
+    for team in teams:
+        inside = next(
+            (o for o in teams if o.folder != team.folder and o.folder.is_relative_to(team.folder)),
+            None,
+        )
+        if inside is not None:
+            raise SweepError(
+                f"team {team.name!r}: folder {team.folder} holds team {inside.name!r}'s folder "
+                "(it would be copied into the first team's box, to be read): give each team a "
+                'folder of its own, side by side ("teams/team1", "teams/team2")'
+            )
     names = [team.name for team in teams]
     slugs = [team.slug for team in teams]
     if len(set(names)) < len(names) or len(set(slugs)) < len(slugs):
@@ -383,7 +397,8 @@ def _limits(value: Any) -> BoxLimits:
         top = MAX_LIMIT[key]
         if isinstance(number, bool) or not isinstance(number, int | float) or not 0 < number <= top:
             raise SweepError(
-                f"[limits] {key}: a number more than 0 and at most {top:,}, not {number!r:.40}"
+                f"[limits] {key}: a number more than 0 and at most {top:,} (MAX_LIMIT; "
+                f"{LIMITS}), not {number!r:.40}"
             )
         given[key] = float(number) if key == "cpu_seconds" else int(number)
     return BoxLimits(**given)
