@@ -144,3 +144,71 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
     assert all(r["delivered"] == "True" for r in by_team["Good"])
     board = _rows(tmp_path / "all" / "leaderboard.csv")
     assert board[0]["team"] == "Good"
+
+
+LANDLOCK_CREATE_RULESET = 444
+"""The system call's number on x86-64 and on arm64 (the generic table)."""
+
+
+def _landlock_abi() -> int:
+    """The kernel's Landlock ABI (0: none, or a machine whose call number is not known here)."""
+    import ctypes
+    import platform
+
+    if not sys.platform.startswith("linux") or platform.machine() not in ("x86_64", "aarch64"):
+        return 0
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.syscall.restype = ctypes.c_long
+    version = ctypes.c_uint32(1)  # LANDLOCK_CREATE_RULESET_VERSION
+    return max(int(libc.syscall(LANDLOCK_CREATE_RULESET, None, ctypes.c_size_t(0), version)), 0)
+
+
+CALLER = """import socket
+try:
+    socket.create_connection(("127.0.0.1", OUTSIDE), timeout=10).close()
+    called = "connected"
+except OSError as exc:
+    called = f"refused: {exc!r}"
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+@pytest.mark.skipif(
+    _landlock_abi() < 4,
+    reason=f"Landlock's TCP rules need ABI 4 (Linux 6.7); this machine has {_landlock_abi()}",
+)
+@pytest.mark.parametrize("landlock", [True, False])
+def test_landlock_lets_a_boxed_program_connect_to_its_run_s_ports_only(
+    tmp_path: Path, landlock: bool
+) -> None:
+    """The team's program calls a port outside its run (the test's own listener), then does
+    its delivery through its run's ports: refused and delivered in its box; without Landlock
+    (``landlock = false``) the same call gets through, so the refusal is the box's."""
+    import socket
+
+    with socket.create_server(("127.0.0.1", 0)) as outside:
+        port = outside.getsockname()[1]
+        program = CALLER.replace("OUTSIDE", str(port)) + GOOD.replace(
+            "    main()\n", '    main()\n    raise SystemExit(f"the outside call: {called}")\n'
+        )
+        extra = f"[limits]\nlandlock = {'true' if landlock else 'false'}"
+        spec = load_grading(
+            grading_folder(tmp_path / "course", extra, {"Caller": program}, targets=("B1",))
+        )
+        run_grading(spec, tmp_path / "out", engine=local_pool(1), workers=1)
+        outside.setblocking(False)
+        try:
+            outside.accept()[0].close()
+            reached = True
+        except BlockingIOError:
+            reached = False
+    (r,) = _rows(tmp_path / "out" / "results.csv")
+    assert r["delivered"] == "True"  # its own run's ports: allowed
+    assert r["status"] == "error"
+    if landlock:
+        assert "the outside call: refused: PermissionError(13, 'Permission denied')" in r["detail"]
+        assert not reached
+    else:
+        assert "the outside call: connected" in r["detail"]
+        assert reached
