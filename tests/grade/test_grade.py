@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from grade_support import grading_folder
+from grade_support import GOOD, grading_folder
 from simmer.grade import load_grading, run_grading
 from simmer.sweep import local_pool
 
@@ -121,3 +121,38 @@ def test_four_teams_ranked_with_every_number_and_the_same_on_1_and_2_workers(
     assert {k: v for k, v in line.items() if k != "rank"} == {
         k: v for k, v in slow.items() if k != "rank"
     }
+
+
+GIVES_UP = '\nforward(3)  # three inches, then it gives up\nraise SystemExit("gave up")\n'
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_each_team_s_first_failures_are_filmed_and_linked_once(tmp_path: Path) -> None:
+    """videos = 1: a team that drives three inches and gives up gets one video, of its first
+    failing scenario, that plays the run; the good team none; --resume films nothing again."""
+    import av
+
+    main_call = 'if __name__ == "__main__":\n    main()\n'
+    assert main_call in GOOD
+    teams = {"Good": GOOD, "Quits": GOOD.replace(main_call, GIVES_UP)}
+    spec = load_grading(grading_folder(tmp_path / "course", "videos = 1", teams))
+    done = run_grading(spec, tmp_path / "out", engine=local_pool(1), workers=1)
+    assert done.filmed == 1
+    rows = _csv(tmp_path / "out" / "results.csv")
+    quits = [r for r in rows if r["team"] == "Quits"]
+    assert [r["status"] for r in quits] == ["error", "error"]
+    videos = sorted(p.relative_to(tmp_path / "out") for p in (tmp_path / "out").rglob("*.mp4"))
+    assert [str(v) for v in videos] == ["runs/Quits_target=B1_seed1/video.mp4"]
+    with av.open(str(tmp_path / "out" / videos[0])) as container:
+        stream = container.streams.video[0]
+        frames = sum(1 for _ in container.decode(stream))
+        assert stream.duration is not None
+        assert stream.time_base is not None
+        seconds = float(stream.duration * stream.time_base)
+    assert frames > 0
+    assert seconds == pytest.approx(float(quits[0]["time"]), abs=0.5)  # the run, played
+    page = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+    assert '<a href="runs/Quits_target=B1_seed1/video.mp4">video</a>' in page
+    again = run_grading(spec, tmp_path / "out", engine=local_pool(1), workers=1, resume=True)
+    assert (again.ran, again.filmed) == (0, 0)
