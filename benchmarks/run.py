@@ -25,6 +25,7 @@ SUITES = [
     "bench_mazes",
     "bench_batch",
     "bench_sensors",
+    "bench_grade",
 ]
 
 

@@ -33,6 +33,7 @@ INTERNAL = (
     "simmer.config",
     "simmer.console",
     "simmer.geometry",
+    "simmer.grade",
     "simmer.lazy",
     "simmer.localize",
     "simmer.lockstep",

@@ -28,6 +28,18 @@ MAP_ZONE: Color = (221, 230, 245)
 """A zone's cells on a sweep's map: pale blue, under the picture's own colours."""
 MAP_INK: Color = (0, 0, 0)
 """Walls and zone names on a sweep's map: black."""
+RUN_COLORS: tuple[Color, ...] = (
+    (230, 60, 200),
+    (0, 185, 230),
+    (255, 140, 0),
+    (140, 90, 240),
+    (150, 210, 30),
+    (0, 150, 140),
+)
+"""Runs side by side (``simmer replay RUN_A RUN_B``): one each, in order; none is the zones'
+blue, green or yellow, nor the red that marks a collision."""
+COLLISION_COLOR: Color = (255, 40, 40)
+"""The mark on a run side by side that has collided: red."""
 
 
 def tint(color: Color, amount: float, toward: Color = (255, 255, 255)) -> Color:

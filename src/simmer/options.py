@@ -11,10 +11,13 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from simmer.errors import FlagError
 from simmer.ports import Ports
+
+if TYPE_CHECKING:
+    from simmer.lockstep.box import Box
 
 MAX_RECORDING_BYTES = 256 * 1024 * 1024
 """Bytes a recording's ``events.jsonl`` and ``trace.csv`` hold together (and the most of either
@@ -70,6 +73,8 @@ class RunOptions:
     program_output: int | None = None
     """A file descriptor the program's standard output and error go to (None: this
     process's own)."""
+    box: Box | None = None
+    """Run the program in this box (:mod:`simmer.lockstep.box`; a graded team's)."""
     record: Path | None = None
     record_limit: int = MAX_RECORDING_BYTES
     video: Path | None = None

@@ -24,6 +24,7 @@ import numpy as np
 
 from simmer.colors import (
     BLACK_TILE,
+    COLLISION_COLOR,
     DROPOFF_COLOR,
     LOADING_COLOR,
     MAP_INK,
@@ -345,3 +346,39 @@ def open_cell_items(
         if code
     )
     return [Cells(rects, color, alpha, (MAP_CELLS + MAP_WALLS) / 2)]
+
+
+COMPARED_TRAIL = 0.25
+"""Inches: the width of a run's path when runs are side by side."""
+
+
+def compared_run_items(
+    placed: FloatArray,
+    block: FloatArray,
+    trail: FloatArray | None,
+    color: Color,
+    settings: Settings,
+    collided: bool,
+) -> list[Item]:
+    """One run of several side by side in the window (``simmer replay RUN_A RUN_B``): its
+    path so far (``trail``, (N, 2) with NaN rows between pieces), its block edged and its
+    robot (outline and heading mark ``placed``, K + 2 rows) filled in its ``color``, and a red
+    cross over the robot once it has ``collided``."""
+    items: list[Item] = []
+    if trail is not None and len(trail) >= 2:
+        ends = np.stack((trail[:-1], trail[1:]), axis=1)  # (N - 1, 2, 2)
+        ends = ends[~np.isnan(ends).any(axis=(1, 2))]
+        lines = tuple(((a, b), (c, d)) for (a, b), (c, d) in ends.tolist())
+        items.append(Lines(lines, color, COMPARED_TRAIL, ZONE_NAME))
+    items.append(Outline(block, settings.block_color, color, settings.block_thickness, BLOCK))
+    body, (start, end) = placed[:-2], placed[-2:].tolist()
+    width = settings.robot_thickness
+    items += [
+        Outline(body, tint(color, 0.55), color, width, ROBOT),
+        Lines((((start[0], start[1]), (end[0], end[1])),), color, width, ROBOT),
+    ]
+    if collided:
+        (x0, y0), (x1, y1) = body.min(axis=0).tolist(), body.max(axis=0).tolist()
+        cross = (((x0, y0), (x1, y1)), ((x0, y1), (x1, y0)))
+        items.append(Lines(cross, COLLISION_COLOR, 2 * width, BLOCK))
+    return items

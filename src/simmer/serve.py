@@ -389,7 +389,13 @@ def _start_program(
         sys.stdout.flush()  # what SimMeR said so far goes first
         sys.stderr.flush()
     program = Program.start(
-        command, env, options.answer, folder=options.program_folder, output=output
+        command,
+        env,
+        options.answer,
+        folder=options.program_folder,
+        output=output,
+        box=options.box,
+        ports=list(ports.values()),
     )
     if program.process.stdout is not None and sys.stdout is not None and sys.stderr is not None:
         printouts.append(ProgramOutput(program.process, sys.stdout, sys.stderr))

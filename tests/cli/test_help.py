@@ -37,6 +37,7 @@ COMMANDS = [
     "replay",
     "render",
     "sweep",
+    "grade",
     "console",
     "maze",
 ]

@@ -41,12 +41,13 @@ LAYERS = [
     {"ui"},
     {"serve"},
     {"sweep", "newfolder", "gym"},
+    {"grade"},
     {"cli"},
     {"__main__"},
 ]
 """From the bottom up, as docs/architecture.md draws them."""
 LAYER = {unit: depth for depth, units in enumerate(LAYERS) for unit in units}
-HEADLESS = {"world", "devices", "config", "sweep", "record", "view", "localize", "runner"}
+HEADLESS = {"world", "devices", "config", "sweep", "grade", "record", "view", "localize", "runner"}
 """Packages a headless run or a sweep uses: none may import pygame at module level."""
 
 

@@ -16,7 +16,7 @@ from simmer.cli.app import AS_COMMAND, app
 # Each import registers a command, in the order simmer --help lists them (not sorted):
 # isort: off
 from simmer.cli import new, check, keys, run, convert, export_map, table  # noqa: F401
-from simmer.cli import plot, replay, render, sweep, console, maze  # noqa: F401
+from simmer.cli import plot, replay, render, sweep, grade, console, maze  # noqa: F401
 
 # isort: on
 

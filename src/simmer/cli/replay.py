@@ -9,11 +9,20 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import MAX_SIMULATED_SECONDS, RunFolder, number_check
+from simmer.cli.common import MAX_SIMULATED_SECONDS, number_check
 
 if TYPE_CHECKING:
+    from simmer.view.compare import Comparison
     from simmer.view.replay_model import Recording
 
+RunFolders = Annotated[
+    list[Path],
+    typer.Argument(
+        help="A run folder (simmer run --record DIR), or several recorded in the same maze "
+        "to show side by side (one colour each).",
+        metavar="DIR...",
+    ),
+]
 TrustOption = Annotated[
     bool,
     typer.Option(
@@ -74,13 +83,39 @@ def load_recording(
     return recording
 
 
+def load_comparison(
+    folders: list[Path], trust: bool, plugins: list[Path] | None, max_seconds: float | None
+) -> Comparison:
+    """Re-simulate several run folders to show side by side; exit status 1 with one line if
+    they cannot be (one of them cannot be replayed, too many, another maze)."""
+    from simmer.errors import ReplayError
+    from simmer.view.compare import MAX_COMPARED, Comparison
+
+    if len(folders) > MAX_COMPARED:
+        err.print(
+            f"{len(folders)} run folders: side by side shows 2 to {MAX_COMPARED} runs "
+            "(MAX_COMPARED; one colour each)",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)
+    recordings = [load_recording(folder, trust, plugins, max_seconds) for folder in folders]
+    try:
+        return Comparison(recordings)
+    except ReplayError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+
+
 @app.command(
     cls=Command,
-    short_help="Replay a recorded run in a window (or --check it).",
-    epilog=example("simmer replay runs/bias"),
+    short_help="Replay recorded runs (several: side by side) or --check them.",
+    epilog=example("simmer replay runs/bias")
+    + "\n\n"
+    + example("simmer replay grading-results/runs/Team-1_seed1 grading-results/runs/Team-2_seed1"),
 )
 def replay(
-    folder: RunFolder,
+    folders: RunFolders,
     check: Annotated[
         bool,
         typer.Option(
@@ -96,8 +131,12 @@ def replay(
     """Replay a recorded run in a window: play, pause, speed, a timeline to drag, the commands
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
-    if not)."""
-    recording = load_recording(folder, trust, plugin, max_seconds)
+    if not). Several run folders of the same maze are shown side by side: one colour each, a
+    legend, one timeline, a red cross on a robot once it has collided."""
+    if len(folders) > 1:
+        _replay_several(folders, check, trust, plugin, max_seconds)
+        return
+    recording = load_recording(folders[0], trust, plugin, max_seconds)
     if check:
         raise typer.Exit(0 if recording.check.matches else 1)
     from simmer.errors import SimmerError
@@ -105,6 +144,27 @@ def replay(
 
     try:
         run_replay(recording, echo=lambda line: out.print(line, markup=False))
+    except SimmerError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+
+
+def _replay_several(
+    folders: list[Path],
+    check: bool,
+    trust: bool,
+    plugins: list[Path] | None,
+    max_seconds: float | None,
+) -> None:
+    """``simmer replay RUN_A RUN_B ...``: the runs side by side (or only --check each)."""
+    comparison = load_comparison(folders, trust, plugins, max_seconds)
+    if check:
+        raise typer.Exit(0 if comparison.matches else 1)
+    from simmer.errors import SimmerError
+    from simmer.ui.compare import run_compare
+
+    try:
+        run_compare(comparison)
     except SimmerError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None

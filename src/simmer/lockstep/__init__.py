@@ -35,8 +35,12 @@ from collections.abc import Mapping, Sequence
 from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from simmer.errors import ProgramNotFound
+
+if TYPE_CHECKING:
+    from simmer.lockstep.box import Box
 from simmer.lockstep.gate.sitecustomize import OLDEST_PYTHON as OLDEST_PYTHON
 from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
 
@@ -182,6 +186,8 @@ class Program:
         *,
         folder: Path | None = None,
         output: int | None = None,
+        box: Box | None = None,
+        ports: Sequence[int] = (),
     ) -> Program:
         """Start ``command`` (raises ``OSError`` if it cannot be started:
         :class:`~simmer.errors.ProgramNotFound` if its first word is on no folder of ``PATH``).
@@ -189,7 +195,9 @@ class Program:
         (``--answer``: what a person would type at the program's prompt). It works in
         ``folder`` and writes its standard output and error to the file descriptor ``output``
         (None: this process's folder and output), so that a sweep worker gives each run's
-        program its own without changing its own."""
+        program its own without changing its own. With ``box`` it runs in that box
+        (:mod:`simmer.lockstep.box`: its folder is the box's copy, ``ports`` the only ones it
+        may connect to)."""
         if answer is not None and len(answer) > MAX_ANSWER:
             raise OSError(f"--answer is {len(answer):,} characters; at most {MAX_ANSWER:,}")
         args = split_command(command, env.get("PATH"))
@@ -198,6 +206,14 @@ class Program:
                 f"cannot start the program: no {args[0]!r} on this terminal's PATH. Activate "
                 "the environment it runs in (SimMeR's: the README's Quick start), or give its "
                 "full path in --program"
+            )
+        if box is not None:
+            from simmer.lockstep.box import box_environment, boxed_command
+
+            args, env, folder = (
+                boxed_command(args, box, list(ports)),
+                box_environment(env, box),
+                box.work,
             )
         process = subprocess.Popen(
             args,

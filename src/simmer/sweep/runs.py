@@ -32,7 +32,7 @@ import traceback
 from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, redirect_stderr, redirect_stdout
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from types import FrameType, ModuleType
@@ -45,6 +45,7 @@ from simmer.errors import LimitReached, WallLimitReached
 from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
 
 if TYPE_CHECKING:
+    from simmer.lockstep.box import BoxLimits
     from simmer.world import Simulation
 
 ControllerKind = Literal["program", "policy"]
@@ -90,6 +91,12 @@ class RunSpec:
     """Whose files come back with the result: no run's, failures' or every run's."""
     answer: str | None = None
     """What the program reads at its prompt (``{target}``: the run's target zone)."""
+    team: str | None = None
+    """A graded team's name (``simmer grade``): two teams' runs differ even where their
+    command lines are the same."""
+    box: BoxLimits | None = None
+    """Run the program in a box with these limits, in its own copy of :attr:`folder`
+    (:mod:`simmer.lockstep.box`)."""
 
     def key(self) -> str:
         """A stable hash of everything that decides the run's outcome, and of the sample's draw
@@ -107,6 +114,10 @@ class RunSpec:
             described["sample"] = self.sample
         if self.answer is not None:
             described["answer"] = self.answer
+        if self.team is not None:
+            described["team"] = [self.team, self.folder]
+        if self.box is not None:
+            described["box"] = asdict(self.box)
         text = json.dumps(described, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -219,6 +230,8 @@ class _Extras:
 
     record: Path | None = None
     video: Path | None = None
+    scratch: Path | None = None
+    """The run's scratch folder (a boxed program's copy of its folder goes there)."""
 
 
 def execute(run: RunSpec, *, video: bool = False) -> RunResult:
@@ -245,6 +258,7 @@ def execute(run: RunSpec, *, video: bool = False) -> RunResult:
             extras = _Extras(
                 record=Path(scratch, "run") if keeping else None,
                 video=Path(scratch, "video.mp4") if video else None,
+                scratch=Path(scratch),
             )
             sim: Simulation | None = None
             try:
@@ -356,6 +370,12 @@ def _run_program(
     answer = run.answer
     if answer is not None and sim.scenario.target is not None:
         answer = answer.replace("{target}", sim.scenario.target)
+    box = None
+    if run.box is not None and extras.scratch is not None:
+        from simmer.lockstep.box import Box, make_box
+
+        box = Box(run.box, *make_box(Path(run.folder), extras.scratch))
+        output.hidden.append(f"{box.work}{os.sep}")  # its traceback names robot.py, not where
     options = RunOptions.free_ports(
         speed=None,
         clock="lockstep",
@@ -367,6 +387,7 @@ def _run_program(
         program_output=output.writing,
         record=extras.record,
         video=extras.video,
+        box=box,
     )
     served = serve(sim, options, echo=lambda _line: None)
     if served.ended_by is RunEnd.QUIT:  # Ctrl-C or a signal stopped this worker: no result
@@ -565,6 +586,9 @@ class _OutputTail:
         self._thread: threading.Thread | None = None
         self._tail = bytearray()
         self._lock = threading.Lock()
+        self.hidden: list[str] = []
+        """Text taken out of the tail (a box's scratch folder: the same run's tail is the
+        same wherever it ran)."""
 
     @property
     def writing(self) -> int:
@@ -605,4 +629,7 @@ class _OutputTail:
             if not self._thread.is_alive():
                 os.close(reading)
         with self._lock:
-            return bytes(self._tail).decode("utf-8", errors="replace").strip()[-STDERR_TAIL:]
+            text = bytes(self._tail).decode("utf-8", errors="replace")
+        for hidden in self.hidden:
+            text = text.replace(hidden, "")
+        return text.strip()[-STDERR_TAIL:]

@@ -10,6 +10,7 @@ simulated second, so the clip plays at real speed.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Protocol
 
 import pygame
 
@@ -18,12 +19,21 @@ from simmer.ui.offscreen import OffscreenRenderer, even_size
 from simmer.ui.scene import default_window_size
 from simmer.ui.video import open_writer
 from simmer.view.frames import check_video_path
-from simmer.view.replay_model import Recording
+from simmer.view.replay_model import Recording, Timeline
 
-__all__ = ["clip_frames", "write_clip"]
+__all__ = ["HasTimeline", "clip_frames", "write_clip"]
 
 
-def clip_frames(recording: Recording, start: float | None, end: float | None) -> range:
+class HasTimeline(Protocol):
+    """A recording, or runs side by side (:class:`~simmer.view.compare.Comparison`)."""
+
+    @property
+    def timeline(self) -> Timeline:
+        """Where its frames are in time."""
+        ...
+
+
+def clip_frames(recording: HasTimeline, start: float | None, end: float | None) -> range:
     """The frames from ``start`` up to ``end`` (seconds from the start of the recording; None:
     its start, its end): ``fps * (end - start)`` of them. :class:`ReplayError` if the times
     are not within the run or ``end`` is not after ``start``."""

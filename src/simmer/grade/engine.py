@@ -1,0 +1,163 @@
+"""Running a grading: every team's program in every scenario, on the sweep's engine (a local
+process pool or Dask), each in its box; then the leaderboard, the reports, the violation
+log, a thumbnail per team and the failure videos."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from simmer.ending import RunEnd
+from simmer.grade.board import Standing, write_board
+from simmer.grade.spec import GradeSpec
+from simmer.sweep.engine import (
+    Engine,
+    _execute_all,
+    _Pool,
+    _progress,
+    _stopped_by_signals,
+    local_pool,
+)
+from simmer.sweep.results import ResultsFile, keep_files, read_rows, row
+from simmer.sweep.runs import RunResult, RunSpec, execute, film
+from simmer.sweep.success import OUTCOME_FIELDS, PROJECT_FIELDS
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+__all__ = ["GradeResult", "grade_columns", "run_grading"]
+
+STOPPED_AT_LIMIT = frozenset({RunEnd.SECONDS, RunEnd.TIMEOUT})
+"""Ends of a run whose output tail a grading does not keep: the program was stopped, and
+what it printed as it was (a traceback of the closed link, or nothing) depends on timing, so
+the same grading would not give the same table."""
+TAIL = ("status", "exit_status", "wall_time", "run", "folder", "detail")
+
+
+@dataclass(frozen=True)
+class GradeResult:
+    """What :func:`run_grading` did."""
+
+    folder: Path
+    runs: int
+    ran: int
+    standings: list[Standing]
+    wall_time: float
+    filmed: int = 0
+
+
+def grade_columns(spec: GradeSpec) -> list[str]:
+    """results.csv's columns: the team and scenario, seed, success, how it failed, the
+    outcome (and the project's fields), then the run's own."""
+    project = PROJECT_FIELDS if spec.project else ()
+    return [*spec.columns, "seed", "success", "failure", *OUTCOME_FIELDS, *project, *TAIL]
+
+
+def run_grading(
+    spec: GradeSpec,
+    folder: Path,
+    *,
+    engine: Engine | None = None,
+    workers: int | None = None,
+    resume: bool = False,
+    console: Console | None = None,
+    source: str = "",
+) -> GradeResult:
+    """Run every run of ``spec`` not yet in ``folder``/results.csv (``resume``), each row
+    appended as it finishes and each run's folder kept under ``runs/``; then put the table in
+    the grading's order, film each team's first failures and write the leaderboard."""
+    started = time.perf_counter()
+    runs = spec.runs()
+    names = spec.folder_names()
+    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
+    try:
+        pool.executor()
+        results = ResultsFile(folder / "results.csv", grade_columns(spec), resume=resume)
+    except BaseException:
+        pool.close(cancel=True)
+        raise
+    todo = [run for run in runs if run.key() not in results.done]
+    with _stopped_by_signals(pool):
+        try:
+            with _progress(console, "grading", len(runs), len(runs) - len(todo)) as advance:
+
+                def record(run: RunSpec, result: RunResult) -> None:
+                    if result.status in STOPPED_AT_LIMIT:  # what it printed as it was stopped
+                        result = replace(result, detail="")  # depends on timing: not kept
+                    kept = (
+                        keep_files(folder, names[run.key()], result.files) if result.files else ""
+                    )
+                    results.add(row(run, result, kept, spec.project))
+                    advance(None)
+
+                try:
+                    _execute_all(todo, pool, execute, record)
+                finally:
+                    complete = all(run.key() in results.done for run in runs)
+                    results.close([run.key() for run in runs] if complete else None)
+            filmed = _film(spec, runs, folder, pool)
+        except BaseException:
+            pool.close(cancel=True)
+            raise
+        pool.close()
+    rows = read_rows(folder / "results.csv")
+    thumbnails = _thumbnails(spec, folder, rows)
+    table = write_board(folder, spec, rows, source, thumbnails)
+    return GradeResult(folder, len(runs), len(todo), table, time.perf_counter() - started, filmed)
+
+
+def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: _Pool) -> int:
+    """Film each team's first ``spec.videos`` failures that have a folder and no video yet."""
+    if not spec.videos:
+        return 0
+    by_key = {r["run"]: r for r in read_rows(folder / "results.csv")}
+    todo: list[RunSpec] = []
+    for team in spec.teams:
+        failures = [
+            run
+            for run in runs
+            if run.team == team.name
+            and (r := by_key.get(run.key())) is not None
+            and r["failure"]
+            and r["folder"]
+            and r["status"] not in (RunEnd.CRASHED, RunEnd.INVALID)
+        ]
+        todo += [
+            run
+            for run in failures[: spec.videos]
+            if not (folder / by_key[run.key()]["folder"] / "video.mp4").exists()
+        ]
+
+    def record(run: RunSpec, result: RunResult) -> None:
+        if "video.mp4" in result.files:
+            from simmer.record.safefile import write_bytes
+
+            write_bytes(
+                folder / by_key[run.key()]["folder"] / "video.mp4", result.files["video.mp4"]
+            )
+
+    _execute_all(todo, pool, film, record)
+    return len(todo)
+
+
+def _thumbnails(spec: GradeSpec, folder: Path, rows: list[dict[str, str]]) -> dict[str, str]:
+    """A picture of each team's first kept run's path (``teams/TEAM.png``), by team name;
+    a run that cannot be drawn has none."""
+    from simmer.record.plots import read_run, write_path_plot
+
+    (folder / "teams").mkdir(exist_ok=True)
+    pictures = {}
+    for team in spec.teams:
+        kept = next((r["folder"] for r in rows if r["team"] == team.name and r["folder"]), "")
+        target = folder / "teams" / f"{team.slug}.png"
+        if not kept:
+            continue
+        try:
+            write_path_plot(read_run(folder / kept), target)
+        except (OSError, ValueError):
+            continue
+        pictures[team.name] = f"teams/{team.slug}.png"
+    return pictures

@@ -1,0 +1,214 @@
+"""The box, tested for what it really enforces here (Linux): a fork bomb, a memory hog, a disk
+filler, an infinite loop and a program reading another team's folder are each stopped or
+refused and reported; the good team's results are the same as graded alone; no process of
+theirs is left behind."""
+
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+
+import pytest
+
+from grade_support import GOOD, grading_folder
+from simmer.grade import load_grading, run_grading
+from simmer.lockstep.box import BOX_UID_BASE
+from simmer.proctree import descendants
+from simmer.sweep import local_pool
+
+FORK_BOMB = """import os, signal, sys
+first = os.getpid()
+while True:
+    try:
+        os.fork()  # parent and children alike go on forking
+    except OSError as exc:
+        if os.getpid() != first:
+            signal.pause()  # a child: waits to be stopped with the run
+        print("fork refused:", exc, flush=True)
+        sys.exit(3)
+"""
+MEMORY_HOG = """hog = []
+while True:
+    hog.append(bytearray(50 * 1024 * 1024))
+"""
+DISK_FILLER = """block = b"x" * (1 << 20)
+with open("fill.bin", "wb") as file:
+    while True:
+        file.write(block)
+        file.flush()
+"""
+LOOP = """while True:
+    pass
+"""
+SPY = """from pathlib import Path
+secret = Path(TARGET)
+print("trying", secret.name, flush=True)
+print(secret.read_text()[:100])
+"""
+LIMITS = """[limits]
+cpu_seconds = 3
+memory_mb = 400
+file_mb = 8
+processes = 16
+open_files = 64
+"""
+
+
+def _command(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")
+    except OSError:
+        return ""
+
+
+def _box_users() -> list[int]:
+    """Processes running as a box's own user (root gives each box one)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid >= BOX_UID_BASE:
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as file:
+        return list(csv.DictReader(file))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)  # 7 program runs up to their limits (30 wall s): room on busy cores
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the box's limits are Linux's")
+def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
+    tmp_path: Path,
+) -> None:
+    teams = {
+        "Good": GOOD,
+        "Bomb": FORK_BOMB,
+        "Hog": MEMORY_HOG,
+        "Filler": DISK_FILLER,
+        "Loop": LOOP,
+        "Spy": SPY.replace(
+            "TARGET", repr(str(tmp_path / "course" / "teams" / "good" / "robot.py"))
+        ),
+    }
+    spec = load_grading(
+        grading_folder(tmp_path / "course", LIMITS, teams, targets=("B1",), wall=30)
+    )
+    run_grading(spec, tmp_path / "all", engine=local_pool(2), workers=2)
+    alone = spec.only(tmp_path / "course" / "teams" / "good")
+    run_grading(alone, tmp_path / "alone", engine=local_pool(1), workers=1)
+    left = [pid for pid in descendants() if "robot.py" in _command(pid)]
+    assert left == []  # no process of theirs left (the forkserver stays, as it does for sweeps)
+    assert _box_users() == []  # nor anywhere else, however it detached
+
+    rows = _rows(tmp_path / "all" / "results.csv")
+    by_team: dict[str, list[dict[str, str]]] = {}
+    for r in rows:
+        by_team.setdefault(r["team"], []).append(r)
+    log = {(r["team"], r["violation"]) for r in _rows(tmp_path / "all" / "violations.csv")}
+    # the fork bomb: forks refused at 16 processes of its box
+    for r in by_team["Bomb"]:
+        assert (r["status"], r["exit_status"]) == ("error", "3")
+        assert "fork refused: [Errno 11] Resource temporarily unavailable" in r["detail"]
+    assert ("Bomb", "process-limit") in log
+    # the memory hog: MemoryError at 400 MB
+    assert all(r["status"] == "error" and "MemoryError" in r["detail"] for r in by_team["Hog"])
+    assert ("Hog", "memory-limit") in log
+    # the disk filler: stopped at 8 MB by the file-size limit, in its own copy of its folder
+    assert all(
+        r["status"] == "error" and "File too large" in r["detail"] for r in by_team["Filler"]
+    )
+    assert ("Filler", "file-size-limit") in log
+    assert not (tmp_path / "course" / "teams" / "filler" / "fill.bin").exists()
+    # the infinite loop: SIGXCPU after 3 CPU seconds
+    assert all(r["exit_status"] == "-24" for r in by_team["Loop"])
+    assert ("Loop", "cpu-limit") in log
+    # the spy: refused by Landlock, the other team's file never printed
+    for r in by_team["Spy"]:
+        assert r["status"] == "error"
+        assert "PermissionError" in r["detail"]
+        assert "Permission denied" in r["detail"]
+        assert "team writes it" not in r["detail"]
+    assert ("Spy", "refused-access") in log
+    # the good team: its numbers are those it gets graded alone
+    alone_rows = _rows(tmp_path / "alone" / "results.csv")
+    skip = {"wall_time"}
+    assert [{k: v for k, v in r.items() if k not in skip} for r in by_team["Good"]] == [
+        {k: v for k, v in r.items() if k not in skip} for r in alone_rows
+    ]
+    assert all(r["delivered"] == "True" for r in by_team["Good"])
+    board = _rows(tmp_path / "all" / "leaderboard.csv")
+    assert board[0]["team"] == "Good"
+
+
+LANDLOCK_CREATE_RULESET = 444
+"""The system call's number on x86-64 and on arm64 (the generic table)."""
+
+
+def _landlock_abi() -> int:
+    """The kernel's Landlock ABI (0: none, or a machine whose call number is not known here)."""
+    import ctypes
+    import platform
+
+    if not sys.platform.startswith("linux") or platform.machine() not in ("x86_64", "aarch64"):
+        return 0
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.syscall.restype = ctypes.c_long
+    version = ctypes.c_uint32(1)  # LANDLOCK_CREATE_RULESET_VERSION
+    return max(int(libc.syscall(LANDLOCK_CREATE_RULESET, None, ctypes.c_size_t(0), version)), 0)
+
+
+CALLER = """import socket
+try:
+    socket.create_connection(("127.0.0.1", OUTSIDE), timeout=10).close()
+    called = "connected"
+except OSError as exc:
+    called = f"refused: {exc!r}"
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+@pytest.mark.skipif(
+    _landlock_abi() < 4,
+    reason=f"Landlock's TCP rules need ABI 4 (Linux 6.7); this machine has {_landlock_abi()}",
+)
+@pytest.mark.parametrize("landlock", [True, False])
+def test_landlock_lets_a_boxed_program_connect_to_its_run_s_ports_only(
+    tmp_path: Path, landlock: bool
+) -> None:
+    """The team's program calls a port outside its run (the test's own listener), then does
+    its delivery through its run's ports: refused and delivered in its box; without Landlock
+    (``landlock = false``) the same call gets through, so the refusal is the box's."""
+    import socket
+
+    with socket.create_server(("127.0.0.1", 0)) as outside:
+        port = outside.getsockname()[1]
+        program = CALLER.replace("OUTSIDE", str(port)) + GOOD.replace(
+            "    main()\n", '    main()\n    raise SystemExit(f"the outside call: {called}")\n'
+        )
+        extra = f"[limits]\nlandlock = {'true' if landlock else 'false'}"
+        spec = load_grading(
+            grading_folder(tmp_path / "course", extra, {"Caller": program}, targets=("B1",))
+        )
+        run_grading(spec, tmp_path / "out", engine=local_pool(1), workers=1)
+        outside.setblocking(False)
+        try:
+            outside.accept()[0].close()
+            reached = True
+        except BlockingIOError:
+            reached = False
+    (r,) = _rows(tmp_path / "out" / "results.csv")
+    assert r["delivered"] == "True"  # its own run's ports: allowed
+    assert r["status"] == "error"
+    if landlock:
+        assert "the outside call: refused: PermissionError(13, 'Permission denied')" in r["detail"]
+        assert not reached
+    else:
+        assert "the outside call: connected" in r["detail"]
+        assert reached
