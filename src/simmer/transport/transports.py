@@ -7,6 +7,7 @@ import logging
 
 from simmer.config.models import SimConfig
 from simmer.options import RunOptions
+from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT, export_line
 from simmer.transport.bus import ByteCounter, CommandBus
 from simmer.transport.serial_pty import SerialServer
 from simmer.transport.tcp import StreamServer, TwoPortServer
@@ -42,6 +43,8 @@ class Transports:
         settings = config.settings
         options = options if options is not None else RunOptions()
         self.host = options.host if options.host is not None else settings.host
+        self._by_hand = options.program is None
+        """No program is started here: a moved port is told to other terminals."""
         port_rx, port_tx, stream_port = options.ports.resolve(settings.port_rx, settings.port_tx)
         if not is_loopback(self.host):
             log.warning(
@@ -96,6 +99,9 @@ class Transports:
         if self.serial is not None:
             link = f" (link {self.serial.link})" if self.serial.link else ""
             lines.append(f"virtual serial port: {self.serial.path}{link}; replies {self.protocol}")
+        served = (self.two_port.port_rx, self.two_port.port_tx, self.stream.port)
+        if self._by_hand and served != (PORT_RX, PORT_TX, STREAM_PORT):
+            lines.append(export_line(*served))
         return lines
 
     def close(self) -> None:
