@@ -34,7 +34,7 @@ from simmer.transport import Transports
 from simmer.ui import Bridge, RecordingRenderer, Window, run_window
 from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
-from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
+from simmer.ui.hud import ALARM, HELP, LIT, TEXT, paint_hud
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 
@@ -440,7 +440,8 @@ def test_hud_shows_the_runs_outcome(window: Window) -> None:
     outcome = shown_outcome(window)
     assert outcome.collisions == 1
     assert outcome.first_collision is not None
-    assert f"1 (first at {outcome.first_collision:.2f} s)" in hud_texts(window)
+    assert outcome.blocked_moves == 1  # the move into the wall went part of its way
+    assert hud_texts(window)["1, 1 move blocked"] == ALARM
 
 
 def test_run_window_quits_on_escape(caplog: pytest.LogCaptureFixture) -> None:

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import pygame
 
 from simmer.ui.belief import paint_belief
-from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
+from simmer.ui.hud import HELP, paint_blocked, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.view.snapshot import HasScene, Snapshot
@@ -144,6 +144,7 @@ class OffscreenRenderer:
             if len(r.dirty) > 1:  # thousands of particles: one rectangle to restore
                 r.dirty[:] = [r.dirty[0].unionall(r.dirty[1:])]
         self.painter.paint_dynamic(r, self.view, snap)
+        paint_blocked(r, self.view, snap)
         paint_hud(r, snap, surface.get_width())
         if show_help:
             paint_help(r, surface.get_size(), keys)

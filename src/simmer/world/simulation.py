@@ -64,6 +64,9 @@ MAX_BLOCKED_LOGGED = 20
 once that the rest are counted only (the outcome and the HUD count every one): a wall follower
 turning against a wall for minutes would otherwise fill the log."""
 
+BLOCKED_SHOWN = 2.0
+"""Simulated seconds the window keeps showing a blocked move after it ended."""
+
 
 @dataclass
 class _Move:
@@ -429,6 +432,24 @@ class Simulation:
         if drive.remaining != 0.0:
             unit = "deg" if drive.rotational else "in"
             self._moving = _Move(printable(text.strip()), self._time, abs(drive.remaining), unit)
+
+    def blocked_now(self, linger: float = BLOCKED_SHOWN) -> str | None:
+        """What the window shows of a blocked move: the drive command moving now if a wall or
+        the block has stopped any of its steps, else the last blocked move for ``linger``
+        simulated seconds after it ended; None otherwise."""
+        moving = self._moving
+        if moving is not None and moving.blocked:
+            return (
+                f"blocked: '{moving.command}' {moving.blocked} steps, "
+                f"got {moving.done:.1f} of {moving.amount:g} {moving.unit}"
+            )
+        last = self.last_blocked
+        if last is not None and self._time - last.time <= linger:
+            return (
+                f"blocked: '{last.command}' {last.blocked_steps} steps, "
+                f"got {last.done:.1f} of {last.amount:g} {last.unit}"
+            )
+        return None
 
     def _end_move(self) -> None:
         """The drive command moving now is done (or stopped): if a wall or the block stopped
