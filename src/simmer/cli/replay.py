@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import MAX_SIMULATED_SECONDS, RunFolder, number_check
+from simmer.cli.common import MAX_SIMULATED_SECONDS, number_check
 
 if TYPE_CHECKING:
     from simmer.view.replay_model import Recording
@@ -76,11 +76,17 @@ def load_recording(
 
 @app.command(
     cls=Command,
-    short_help="Replay a recorded run in a window (or --check it).",
-    epilog=example("simmer replay runs/bias"),
+    short_help="Replay a recorded run in a window (or --check runs).",
+    epilog=example("simmer replay runs/bias", "simmer replay --check runs/*"),
 )
 def replay(
-    folder: RunFolder,
+    folders: Annotated[
+        list[Path],
+        typer.Argument(
+            help="A run folder (simmer run --record DIR); with --check, any number of them.",
+            metavar="DIR...",
+        ),
+    ],
     check: Annotated[
         bool,
         typer.Option(
@@ -96,10 +102,16 @@ def replay(
     """Replay a recorded run in a window: play, pause, speed, a timeline to drag, the commands
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
-    if not)."""
-    recording = load_recording(folder, trust, plugin, max_seconds)
+    if not). With --check, every folder given is checked in turn (a TA's whole class at
+    once): exit status 1 if any differs or cannot be replayed, and a last line counting them."""
     if check:
-        raise typer.Exit(0 if recording.check.matches else 1)
+        raise typer.Exit(_check_all(folders, trust, plugin, max_seconds))
+    if len(folders) != 1:
+        raise typer.BadParameter(
+            f"{len(folders)} folders: the window replays one (--check takes many)",
+            param_hint="DIR",
+        )
+    recording = load_recording(folders[0], trust, plugin, max_seconds)
     from simmer.errors import SimmerError
     from simmer.ui.replay import run_replay
 
@@ -108,3 +120,25 @@ def replay(
     except SimmerError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
+
+
+def _check_all(
+    folders: list[Path], trust: bool, plugins: list[Path] | None, max_seconds: float | None
+) -> int:
+    """``--check`` of each folder in turn, each one's lines as for one; the exit status (1 if
+    any differs or cannot be replayed), with a count at the end when there are several."""
+    failed: list[Path] = []
+    for folder in folders:
+        try:
+            matches = load_recording(folder, trust, plugins, max_seconds).check.matches
+        except typer.Exit:
+            matches = False
+        if not matches:
+            failed.append(folder)
+    if len(folders) > 1:
+        line = f"{len(folders) - len(failed)} of {len(folders)} runs match their recordings"
+        if failed:
+            err.print(f"{line}; not: {', '.join(map(str, failed))}", style="bold red", markup=False)
+        else:
+            out.print(line, markup=False)
+    return 1 if failed else 0
