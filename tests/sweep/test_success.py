@@ -101,3 +101,23 @@ def test_simmer_sweep_refuses_it_before_the_first_run(tmp_path: Path) -> None:
     assert len(lines) == 1, done.stderr
     assert lines[0].startswith("sweep.toml:4: success: 'target < 5': target is a zone's name")
     assert not (tmp_path / "sweep-results").exists()
+
+
+def test_busy_nan_and_blocked_counts_are_columns_a_condition_may_name() -> None:
+    """busy_replies was in report.json only; now results.csv has it, and blocked moves."""
+    from simmer import Simulation
+    from simmer.sweep.success import flat_outcome, succeeded
+    from simmer.world.outcome import Outcome
+
+    for name in ("nan_replies", "busy_replies", "blocked_moves"):
+        assert name in OUTCOME_FIELDS
+    sim = Simulation.from_config()
+    outcome = Outcome.attach(sim)
+    sim.command("w0-60")  # into the wall above the start
+    sim.command("w0-1")  # refused: the drive is still moving
+    sim.run_until_idle()
+    report = outcome.report().as_dict()
+    fields = flat_outcome(report)
+    assert (fields["busy_replies"], fields["nan_replies"], fields["blocked_moves"]) == (1, 0, 1)
+    assert succeeded("busy_replies == 1 and blocked_moves == 1", report)
+    assert not succeeded("blocked_moves == 0", report)
