@@ -118,11 +118,14 @@ def legend(scene: HasScene) -> list[tuple[Color, str]]:
     return items
 
 
-def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
-    """The HUD's fixed parts: unlit key caps, labels, colour legend (painted once)."""
-    for key in MANUAL_KEYS:
-        _key_cap(r, key, lit=False)
-    r.draw_text("h: help", (12, 78), DIM, 20)
+def paint_hud_static(r: Renderer, scene: HasScene, width: int, *, keys: bool = True) -> None:
+    """The HUD's fixed parts: unlit key caps (unless ``keys`` is False: a video of a run
+    without a window, where no key was there to press), labels, colour legend (painted
+    once)."""
+    if keys:
+        for key in MANUAL_KEYS:
+            _key_cap(r, key, lit=False)
+        r.draw_text("h: help", (12, 78), DIM, 20)
     from simmer.config.zones import project_run
 
     second = "project" if project_run(scene.config) else "Task 2 stopwatch"
@@ -139,18 +142,21 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
         r.draw_text(label, (x + 22, y), TEXT, 20)
 
 
-def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
+def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None, *, keys: bool = True) -> None:
     """The HUD's changing values; everything in simulated time. ``width``: the surface's, if
-    long lines must be cut to fit it."""
+    long lines must be cut to fit it. ``keys`` False (a video of a run without a window): no
+    key lights and no speed (the video plays in real time, whatever the run's speed was)."""
     # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
     r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), snap.time % 1.0, UNLIT))
-    for key in sorted(snap.held):
-        _key_cap(r, key, lit=True)
+    if keys:
+        for key in sorted(snap.held):
+            _key_cap(r, key, lit=True)
 
     paused = snap.paused
     state = "PAUSED (Space resumes)" if paused else "running"  # ends before the commands
+    speed = f"   speed {speed_text(snap.speed)}   {state}" if keys else ""
     r.draw_text(
-        f"{snap.time:.2f} s   speed {speed_text(snap.speed)}   {state}",
+        f"{snap.time:.2f} s{speed}",
         (VALUE_X, ROWS[0]),
         LIT if paused else TEXT,
         22,

@@ -63,6 +63,7 @@ class OffscreenRenderer:
         *,
         show_trail: bool = True,
         show_belief: bool = True,
+        keys: bool = True,
     ) -> None:
         self.scene = scene
         if surface is None:
@@ -71,6 +72,8 @@ class OffscreenRenderer:
         self.renderer = PygameRenderer(self.surface, text)
         self.painter = ScenePainter(scene)
         self.view = View(1.0, 0.0, 0.0)
+        self.keys = keys
+        """Draw the window's key caps, help hint and speed (False: a headless run's video)."""
         self.show_trail = show_trail
         self.show_belief = show_belief
         """Draw the program's belief (``robot.show``) when the snapshot has one."""
@@ -94,7 +97,7 @@ class OffscreenRenderer:
         self.static = static_layer(size, self.surface)
         static = PygameRenderer(self.static, self.renderer.text)
         self.painter.paint_static(static, self.view, size)
-        paint_hud_static(static, self.scene, size[0])
+        paint_hud_static(static, self.scene, size[0], keys=self.keys)
         self._clean = self.static.copy()
         self._trail = None
         self.invalidate()
@@ -145,7 +148,7 @@ class OffscreenRenderer:
                 r.dirty[:] = [r.dirty[0].unionall(r.dirty[1:])]
         self.painter.paint_dynamic(r, self.view, snap)
         paint_blocked(r, self.view, snap)
-        paint_hud(r, snap, surface.get_width())
+        paint_hud(r, snap, surface.get_width(), keys=self.keys)
         if show_help:
             paint_help(r, surface.get_size(), keys)
         self._drawn = merge_rects(r.dirty)
