@@ -13,6 +13,7 @@ import math
 import os
 import threading
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
@@ -35,6 +36,7 @@ from simmer.ui import Bridge, RecordingRenderer, Window, run_window
 from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import ALARM, HELP, LIT, TEXT, paint_hud
+from simmer.ui.scene import default_window_size
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 
@@ -571,3 +573,18 @@ def test_the_window_says_one_thing_when_no_screen_is_found(
         echo=said.append,
     )
     assert "window open (press h for help)" in said
+
+
+def test_the_screenshots_file_is_said_in_the_terminal_too(tmp_path: Path) -> None:
+    """Under --program the log goes to a file: the screenshot's path was only there."""
+    sim = Simulation.from_config()
+    said: list[str] = []
+    bridge = Bridge(sim, echo=said.append)
+    window = Window(bridge, surface=pygame.Surface(default_window_size(sim)), save_dir=tmp_path)
+    tick(window)
+    key(pygame.K_p, unicode="p")
+    tick(window)
+    (png,) = tmp_path.glob("simmer-*.png")
+    assert said == [f"saved the screenshot {png}"]
+    window.close()
+    bridge.close()
