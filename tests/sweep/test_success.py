@@ -121,3 +121,19 @@ def test_busy_nan_and_blocked_counts_are_columns_a_condition_may_name() -> None:
     assert (fields["busy_replies"], fields["nan_replies"], fields["blocked_moves"]) == (1, 0, 1)
     assert succeeded("busy_replies == 1 and blocked_moves == 1", report)
     assert not succeeded("blocked_moves == 0", report)
+
+
+def test_a_summary_states_the_base_configurations_fixed_noise() -> None:
+    """With the lab's bias on, the 0/0 row of an error sweep failed 60 of 60 with no word why:
+    the summary now names every error and bias the sweep leaves as the file has it."""
+    from simmer.sweep.results import fixed_noise
+
+    from helpers import make_config, noisy_data
+
+    config = make_config(noisy_data())
+    fixed = fixed_noise(config, ["drives.w0.error.y", "drives.r0.error.rotation"])
+    assert "`drives.w0.bias.rotation = 0.2`" in fixed
+    assert "`drives.w0.error.x = 0.02`" in fixed
+    assert "`sensors.u0.error = 0.05`" in fixed
+    assert not any("w0.error.y" in item or "r0.error.rotation" in item for item in fixed)
+    assert fixed_noise(make_config(noisy_data()), ["drives", "sensors"]) == []
