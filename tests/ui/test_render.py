@@ -409,3 +409,24 @@ def test_the_axes_mark_is_drawn_in_the_rulers_margin_at_the_origin() -> None:
     arrows = [c for c in rec.of("segment") if c[0][0] >= x0 - 20 and c[0][1] <= y0 + 80]
     assert any(end[0] > start[0] + 20 and end[1] == start[1] for start, end, *_ in arrows)
     assert any(end[1] > start[1] + 20 and end[0] == start[0] for start, end, *_ in arrows)
+
+
+def test_a_beliefs_label_sits_in_a_box_readable_over_its_cloud() -> None:
+    """A label under a thick particle cloud was purple on purple: it has a light box now."""
+    from simmer.localize.belief import read_belief
+    from simmer.ui.belief import BELIEF_COLOR, LABEL_BACK, paint_belief
+
+    rng = np.random.default_rng(0)
+    particles = [[30 + rng.normal(0, 2), 20 + rng.normal(0, 2), rng.uniform(0, 360), 1.0]
+                 for _ in range(3000)]  # fmt: skip
+    belief, _ = read_belief({"particles": particles, "labels": [[30, 20, "here"]]})
+    surface = pygame.Surface((800, 500))
+    view = View(16.0, 0.0, 0.0)
+    paint_belief(PygameRenderer(surface), view, belief, (96.0, 48.0))
+    pixels = pygame.surfarray.array3d(surface)
+    x, y = (round(v) for v in view.point(30, 20))
+    around = pixels[x - 20 : x + 20, y - 6 : y + 6]
+    back = (around == LABEL_BACK).all(axis=-1).mean()
+    ink = (around == BELIEF_COLOR).all(axis=-1).mean()
+    assert back > 0.4  # the box behind the text, not the cloud
+    assert 0.02 < ink < 0.6  # the text itself, on it
