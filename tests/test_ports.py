@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from simmer.client import Address, address
-from simmer.errors import ConnectionFailed, FlagError
+from simmer.errors import ConnectionFailed, FlagError, PortsError
 from simmer.lockstep import program_environment
 from simmer.options import RunOptions
 from simmer.ports import (
@@ -15,7 +15,6 @@ from simmer.ports import (
     PORTS_VARIABLE,
     STREAM_PORT,
     Ports,
-    PortsError,
     environment_ports,
     parse_ports,
 )

@@ -27,14 +27,13 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, Literal, NamedTuple, Protocol, runtime_checkable
 
-from simmer.errors import ConnectionFailed, ReplyTimeout
+from simmer.errors import ConnectionFailed, PortsError, ReplyTimeout
 from simmer.ports import (
     AUTO,
     PORT_RX,
     PORT_TX,
     PORTS_VARIABLE,
     STREAM_PORT,
-    PortsError,
     environment_ports,
 )
 from simmer.protocol import (

@@ -23,7 +23,8 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
     ├── RunFolderError + ValueError a run folder's events or trace cannot be read
     ├── FolderExists + ValueError   ``simmer new`` would write over files
-    └── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    ├── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    └── PortsError + ValueError     ``--ports`` or ``SIMMER_PORTS`` names no three ports
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -191,6 +192,11 @@ class RunFolderError(SimmerError, ValueError):
 
 class FolderExists(SimmerError, ValueError):
     """The destination holds files already: nothing is written over them."""
+
+
+class PortsError(SimmerError, ValueError):
+    """A ``--ports`` flag or ``SIMMER_PORTS`` value that names no three ports; its message is
+    the one line to print (what was given, where, and what to write instead)."""
 
 
 class FlagError(SimmerError, ValueError):

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from simmer.errors import FlagError
-from simmer.ports import Ports, PortsError, environment_ports, parse_ports
+from simmer.errors import FlagError, PortsError
+from simmer.ports import Ports, environment_ports, parse_ports
 
 MAX_RECORDING_BYTES = 256 * 1024 * 1024
 """Bytes a recording's ``events.jsonl`` and ``trace.csv`` hold together (and the most of either

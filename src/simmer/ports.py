@@ -7,6 +7,8 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from simmer.errors import PortsError
+
 PORT_RX = 61200
 """SimMeR's two-port scheme: messages arrive here (a client transmits to it)."""
 PORT_TX = 61201
@@ -24,11 +26,6 @@ three ports (:func:`parse_ports`): set once in a terminal, ``simmer run``, ``sim
 and a program started there all move together."""
 AUTO = "auto"
 """``--ports auto`` (or ``SIMMER_PORTS=auto`` for ``simmer run``): three free ports, printed."""
-
-
-class PortsError(ValueError):
-    """A ``--ports`` flag or ``SIMMER_PORTS`` value that names no three ports; its message is
-    the one line to print (what was given, where, and what to write instead)."""
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,8 @@ def _ports(port_rx: int, port_tx: int) -> tuple[int, int, int] | None:
     """The three ports ``simmer run`` would serve on in this terminal: ``SIMMER_PORTS``'s if
     it names them (it is checked: a wrong one is a plain line and exit status 1; ``auto`` is
     None, free ones chosen at start), else the configuration's and SimMeR's persistent one."""
-    from simmer.ports import Ports, PortsError, environment_ports
+    from simmer.errors import PortsError
+    from simmer.ports import Ports, environment_ports
 
     try:
         chosen = environment_ports() or Ports()

@@ -69,8 +69,8 @@ def console(
     """Interactive console: type commands (u0, w0-6, ...) and see the replies."""
     from simmer.client import connect
     from simmer.console import run_console
-    from simmer.errors import ClientError
-    from simmer.ports import AUTO, PortsError, parse_ports
+    from simmer.errors import ClientError, PortsError
+    from simmer.ports import AUTO, parse_ports
 
     port_rx = port_tx = None
     if ports is not None:
