@@ -50,8 +50,10 @@ def drive_sequence(robot: Client) -> list[list[float]]:
 def main(argv: list[str] | None = None) -> list[list[float]]:
     """Connect and run the sequence; returns the readings taken after each move."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--host", default="127.0.0.1")
-    parser.add_argument("--port", type=int, default=61202, help="persistent protocol port")
+    parser.add_argument("--host", help="simulator address (default: SIMMER_HOST, else 127.0.0.1)")
+    parser.add_argument(
+        "--port", type=int, help="persistent protocol port (default: SIMMER_PORTS's, else 61202)"
+    )
     args = parser.parse_args(argv)
 
     with connect(args.host, args.port) as robot:

@@ -25,8 +25,10 @@ LIMIT = 2.0  # in
 def main(argv: list[str] | None = None) -> int:
     """Advance until blocked; returns how many steps were taken."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--host", default="127.0.0.1")
-    parser.add_argument("--port", type=int, default=61202, help="persistent protocol port")
+    parser.add_argument("--host", help="simulator address (default: SIMMER_HOST, else 127.0.0.1)")
+    parser.add_argument(
+        "--port", type=int, help="persistent protocol port (default: SIMMER_PORTS's, else 61202)"
+    )
     parser.add_argument("--step", type=float, default=0.5, help="inches per step")
     parser.add_argument("--limit", type=float, default=LIMIT, help="inches kept from obstacles")
     parser.add_argument("--max-steps", type=int, default=200)

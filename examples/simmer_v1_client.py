@@ -9,13 +9,17 @@ ready, so no ``sleep`` is needed between the two steps. Start ``simmer run``, th
 
 from __future__ import annotations
 
+import os
 import socket
 import struct
 import sys
 
-HOST = "127.0.0.1"
-PORT_TX = 61200  # the client transmits here (the simulator's port_rx)
-PORT_RX = 61201  # the client receives here (the simulator's port_tx)
+HOST = os.environ.get("SIMMER_HOST") or "127.0.0.1"
+# SimMeR's ports, 61200 and 61201 unless SIMMER_PORTS moves them (as it does every simmer
+# command's): "62000" for 62000, 62001, 62002, or three ports "RX,TX,PORT"
+PORTS = [int(port) for port in os.environ.get("SIMMER_PORTS", "61200").split(",")]
+PORT_TX = PORTS[0]  # the client transmits here (the simulator's port_rx)
+PORT_RX = PORTS[1] if len(PORTS) == 3 else PORTS[0] + 1  # the client receives here (port_tx)
 REPLY_BYTES = 4
 
 

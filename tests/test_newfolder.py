@@ -11,11 +11,19 @@ from typer.testing import CliRunner
 
 from simmer.cli import app
 from simmer.config import load_config
-from simmer.newfolder import new_folder
+from simmer.newfolder import PARTS, new_folder
 
 from helpers import EXAMPLES, REPO
 
 TEMPLATE = REPO / "src/simmer/data/new"
+LAB1_FILES = (
+    "README.md",
+    "dead_reckoning.py",
+    "my_rover.toml",
+    "obstacle_avoidance.py",
+    "sweep_dead_reckoning.toml",
+    "sweep_obstacle_avoidance.toml",
+)
 
 
 def test_simmer_new_makes_a_lab_folder_whose_files_are_the_examples(tmp_path: Path) -> None:
@@ -23,14 +31,7 @@ def test_simmer_new_makes_a_lab_folder_whose_files_are_the_examples(tmp_path: Pa
     result = CliRunner().invoke(app, ["new", str(folder)])
     assert result.exit_code == 0, result.output
     names = sorted(path.name for path in folder.iterdir())
-    assert names == [
-        "README.md",
-        "dead_reckoning.py",
-        "my_rover.toml",
-        "obstacle_avoidance.py",
-        "sweep_dead_reckoning.toml",
-        "sweep_obstacle_avoidance.toml",
-    ]
+    assert names == list(LAB1_FILES)
     for copy, original in (
         ("my_rover.toml", "lab1_rover.toml"),
         ("dead_reckoning.py", "dead_reckoning.py"),
@@ -78,3 +79,39 @@ def test_simmer_new_copies_only_the_templates_files(
     written = new_folder(tmp_path / "lab1")
     assert [path.name for path in written] == ["README.md"]
     assert "{lab_page}" not in written[0].read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("flags", "added"),
+    [
+        (["--project"], PARTS["project"]),
+        (["--localization"], PARTS["localization"]),
+        (["--project", "--localization"], (*PARTS["project"], *PARTS["localization"])),
+    ],
+)
+def test_simmer_new_adds_the_project_and_localization_pages_files(
+    tmp_path: Path, flags: list[str], added: tuple[str, ...]
+) -> None:
+    folder = tmp_path / "mine"
+    result = CliRunner().invoke(app, ["new", str(folder), *flags])
+    assert result.exit_code == 0, result.output
+    names = {path.name for path in folder.iterdir()}
+    assert names == {*LAB1_FILES, *added}
+    for name in added:  # the examples themselves; a sweep runs the folder's python
+        copy = (folder / name).read_text(encoding="utf-8")
+        original = (EXAMPLES / name).read_text(encoding="utf-8")
+        if name.startswith("sweep_"):
+            assert re.search(r'^program = "python -u ', copy, re.M), name
+            assert (
+                copy.splitlines()[5:]
+                == original.replace("python3 -u", "python -u").splitlines()[5:]
+            )
+        else:
+            assert copy == original, name
+
+
+def test_a_plain_simmer_new_is_lab_1_alone(tmp_path: Path) -> None:
+    written = new_folder(tmp_path / "lab1")
+    assert {path.name for path in written} == set(LAB1_FILES)
+    with pytest.raises(ValueError, match="no part 'gym'"):
+        new_folder(tmp_path / "other", ["gym"])

@@ -26,10 +26,17 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Literal, Protocol, runtime_checkable
+from typing import Any, Literal, NamedTuple, Protocol, runtime_checkable
 
-from simmer.errors import ConnectionFailed, ReplyTimeout
-from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
+from simmer.errors import ConnectionFailed, PortsError, ReplyTimeout
+from simmer.ports import (
+    AUTO,
+    PORT_RX,
+    PORT_TX,
+    PORTS_VARIABLE,
+    STREAM_PORT,
+    environment_ports,
+)
 from simmer.protocol import (
     DOCUMENT,
     DOCUMENT_HEADER,
@@ -47,6 +54,7 @@ from simmer.protocol import (
 from simmer.untrusted import parse_json
 
 __all__ = [
+    "Address",
     "AskLink",
     "Client",
     "ClockLink",
@@ -56,6 +64,7 @@ __all__ = [
     "SerialLink",
     "StreamLink",
     "TwoPortLink",
+    "address",
     "connect",
 ]
 
@@ -606,6 +615,44 @@ def _from_env(name: str, default: int) -> int:
     return int(value) if value.isdigit() else default
 
 
+class Address(NamedTuple):
+    """Where the simulator listens (:func:`address`): its host and its three ports."""
+
+    host: str
+    """The simulator's address (127.0.0.1: this machine)."""
+    port_rx: int
+    """The two-port scheme's message port: a program transmits here."""
+    port_tx: int
+    """The two-port scheme's reply port: a program receives from here."""
+    port: int
+    """The persistent protocol's port."""
+
+
+def address() -> Address:
+    """Where the simulator listens, from the environment: ``SIMMER_HOST`` (default 127.0.0.1),
+    ``SIMMER_PORTS`` (``N`` for ``N``, ``N+1``, ``N+2``, or ``RX,TX,PORT``: what ``simmer
+    run --ports`` and ``simmer console --ports`` take), and over it ``SIMMER_PORT_RX``,
+    ``SIMMER_PORT_TX`` and ``SIMMER_PORT`` (one each; ``simmer run --program`` sets all of
+    them to its run's ports); SimMeR's standard ports for any none names. Raises
+    :class:`~simmer.errors.ConnectionFailed` for a ``SIMMER_PORTS`` that names no ports."""
+    if os.environ.get(PORTS_VARIABLE, "").strip().lower() == AUTO:
+        raise ConnectionFailed(
+            f"{PORTS_VARIABLE}=auto picks free ports for simmer run only; set {PORTS_VARIABLE} "
+            "to the three ports that simmer run printed (its 'other terminals' line)"
+        )
+    try:
+        chosen = environment_ports()
+    except PortsError as exc:
+        raise ConnectionFailed(str(exc)) from None
+    rx, tx, stream = chosen.resolve(PORT_RX, PORT_TX) if chosen else (PORT_RX, PORT_TX, STREAM_PORT)
+    return Address(
+        os.environ.get("SIMMER_HOST", "") or "127.0.0.1",
+        _from_env("SIMMER_PORT_RX", rx),
+        _from_env("SIMMER_PORT_TX", tx),
+        _from_env("SIMMER_PORT", stream),
+    )
+
+
 def connect(
     host: str | None = None,
     port: int | None = None,
@@ -627,16 +674,19 @@ def connect(
     two-port scheme (the default scheme then) or a serial port; the persistent protocol always
     uses its own frames. Raises :class:`~simmer.errors.ConnectionFailed`.
 
-    Unless given, the address and ports come from ``SIMMER_HOST``, ``SIMMER_PORT``,
+    Unless given, the address and ports are :func:`address`'s: ``SIMMER_PORTS`` (one setting
+    for all three, as ``simmer run --ports`` takes), ``SIMMER_HOST``, ``SIMMER_PORT``,
     ``SIMMER_PORT_RX`` and ``SIMMER_PORT_TX`` (``simmer run --program`` sets them to the run's
     own ports), else 127.0.0.1 and SimMeR's standard ports; ``lockstep`` (for :meth:`Client.
     sleep` and :meth:`Client.wait_idle`) from ``SIMMER_LOCKSTEP``: set it for a program you
     start by hand against ``simmer run --clock lockstep``.
     """
-    host = host if host is not None else os.environ.get("SIMMER_HOST", "127.0.0.1")
-    port = port if port is not None else _from_env("SIMMER_PORT", STREAM_PORT)
-    port_rx = port_rx if port_rx is not None else _from_env("SIMMER_PORT_RX", PORT_RX)
-    port_tx = port_tx if port_tx is not None else _from_env("SIMMER_PORT_TX", PORT_TX)
+    needed = serial is None and None in (host, port, port_rx, port_tx)
+    where = address() if needed else Address("127.0.0.1", PORT_RX, PORT_TX, STREAM_PORT)
+    host = where.host if host is None else host
+    port = where.port if port is None else port
+    port_rx = where.port_rx if port_rx is None else port_rx
+    port_tx = where.port_tx if port_tx is None else port_tx
     if lockstep is None:
         lockstep = bool(os.environ.get("SIMMER_LOCKSTEP"))
     if scheme is None:

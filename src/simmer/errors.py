@@ -25,7 +25,8 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── FolderExists + ValueError   ``simmer new`` would write over files
     ├── GenerateError + ValueError  no generated maze met the asked ranges
     ├── FlagError + ValueError      a command-line flag ``simmer run`` refuses
-    └── BatchError + ValueError     a batch or an environment given what it cannot take
+    ├── BatchError + ValueError     a batch or an environment given what it cannot take
+    └── PortsError + ValueError     ``--ports`` or ``SIMMER_PORTS`` names no three ports
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -205,6 +206,11 @@ class FolderExists(SimmerError, ValueError):
 class GenerateError(SimmerError, ValueError):
     """No maze met the generator's asked ranges within ``MAX_ATTEMPTS`` draws of its seed (the
     message says which range to widen)."""
+
+
+class PortsError(SimmerError, ValueError):
+    """A ``--ports`` flag or ``SIMMER_PORTS`` value that names no three ports; its message is
+    the one line to print (what was given, where, and what to write instead)."""
 
 
 class FlagError(SimmerError, ValueError):

@@ -9,12 +9,13 @@ edit to four signatures.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from simmer.errors import FlagError
-from simmer.ports import Ports
+from simmer.errors import FlagError, PortsError
+from simmer.ports import Ports, environment_ports, parse_ports
 
 if TYPE_CHECKING:
     from simmer.lockstep.box import Box
@@ -91,6 +92,8 @@ class RunOptions:
         port_rx: int | None = None,
         port_tx: int | None = None,
         port: int | None = None,
+        ports: str | None = None,
+        environ: Mapping[str, str] | None = None,
         serial: bool = False,
         serial_link: Path | None = None,
         lidar_serial: bool = False,
@@ -106,7 +109,12 @@ class RunOptions:
         ports, and (headless) as fast as possible, unless the flags say otherwise; ``--speed``
         is 'max' or within :data:`SPEED_RANGE`; ``--answer`` needs a program and is at most
         :data:`~simmer.lockstep.MAX_ANSWER` characters. Raises :class:`FlagError` naming the
-        flag it refuses."""
+        flag it refuses.
+
+        ``ports`` (``--ports``: ``auto``, ``N`` or ``RX,TX,PORT``) moves all three ports at
+        once; without it ``SIMMER_PORTS`` in ``environ`` (default: this process's) does, except
+        for a program's run, which keeps to free ports of its own; ``--port-rx``, ``--port-tx``
+        and ``--port`` still name one each, over either."""
         from simmer.lockstep import MAX_ANSWER
 
         if speed is None:
@@ -122,8 +130,20 @@ class RunOptions:
                 f"{len(answer):,} characters; at most {MAX_ANSWER:,} (a few typed lines)",
                 "--answer",
             )
+        try:
+            chosen = (
+                parse_ports(ports)
+                if ports is not None
+                else None
+                if program
+                else environment_ports(environ)
+            )
+        except PortsError as exc:
+            raise FlagError(str(exc)) from None
         return cls(
-            ports=Ports.from_flags(port_rx, port_tx, port, program=program is not None),
+            ports=Ports.from_flags(
+                port_rx, port_tx, port, program=program is not None, chosen=chosen
+            ),
             serial=serial,
             serial_link=serial_link,
             lidar_serial=lidar_serial,

@@ -246,7 +246,9 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
                 if options.video is not None:
                     from simmer.ui.video import VideoRecorder
 
-                    filming = VideoRecorder(sim, options.video, controls=runner)
+                    filming = VideoRecorder(
+                        sim, options.video, controls=runner, window=options.window
+                    )
                     said(f"recording a video into {options.video}")
                 for line in transports.describe():
                     said(line)

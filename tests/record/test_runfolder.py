@@ -39,6 +39,7 @@ from simmer.record.runfolder import project_lines
 from simmer.record.trace import POSE_COLUMNS
 from simmer.world.events import (
     BeliefEvent,
+    BlockedMoveEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
@@ -148,6 +149,7 @@ def test_every_event_type_round_trips_with_nan_and_infinities() -> None:
         StepEvent(0.1, pose, 6),
         CollisionEvent(0.2, pose, 12),
         CollisionEndEvent(0.3, pose, 18),
+        BlockedMoveEvent(0.35, "w0-36", 0.1, 15, 4.25, 36.0, "in", 21),
         ResetEvent(0.4, 24),
         KeysEvent(0.5, frozenset("wd"), 30),
         PlaceEvent(0.6, pose, 36),

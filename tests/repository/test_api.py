@@ -32,6 +32,7 @@ EXPORTED = {
         "replay",
     ],
     "simmer.client": [
+        "Address",
         "AskLink",
         "Client",
         "ClockLink",
@@ -41,6 +42,7 @@ EXPORTED = {
         "SerialLink",
         "StreamLink",
         "TwoPortLink",
+        "address",
         "connect",
     ],
     "simmer.devices": [

@@ -12,9 +12,10 @@ from helpers import REPO
 SRC = REPO / "src" / "simmer"
 CLI = SRC / "cli"
 LIBRARIES = ("typer", "click")
-MAX_RUN_LINES = 60
-"""``simmer run``'s command function, its signature (a line per flag) and docstring
-included; it was 277 lines when it decided what its flags meant itself."""
+MAX_RUN_BODY_LINES = 36
+"""``simmer run``'s command function below its signature and docstring (the signature grows a
+line with each flag, which is declaring, not deciding); the whole function was 277 lines when
+it decided what its flags meant itself."""
 
 
 def _private(name: str) -> bool:
@@ -57,7 +58,8 @@ def test_the_run_command_only_parses_its_flags() -> None:
     tree = ast.parse((CLI / "run.py").read_text(encoding="utf-8"))
     run = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "run")
     assert run.end_lineno is not None
-    assert run.end_lineno - run.lineno + 1 <= MAX_RUN_LINES
+    body = run.body[1:]  # below the docstring
+    assert run.end_lineno - body[0].lineno + 1 <= MAX_RUN_BODY_LINES
 
 
 def test_the_options_of_a_run_know_nothing_of_typer() -> None:

@@ -101,3 +101,39 @@ def test_simmer_sweep_refuses_it_before_the_first_run(tmp_path: Path) -> None:
     assert len(lines) == 1, done.stderr
     assert lines[0].startswith("sweep.toml:4: success: 'target < 5': target is a zone's name")
     assert not (tmp_path / "sweep-results").exists()
+
+
+def test_busy_nan_and_blocked_counts_are_columns_a_condition_may_name() -> None:
+    """busy_replies was in report.json only; now results.csv has it, and blocked moves."""
+    from simmer import Simulation
+    from simmer.sweep.success import flat_outcome, succeeded
+    from simmer.world.outcome import Outcome
+
+    for name in ("nan_replies", "busy_replies", "blocked_moves"):
+        assert name in OUTCOME_FIELDS
+    sim = Simulation.from_config()
+    outcome = Outcome.attach(sim)
+    sim.command("w0-60")  # into the wall above the start
+    sim.command("w0-1")  # refused: the drive is still moving
+    sim.run_until_idle()
+    report = outcome.report().as_dict()
+    fields = flat_outcome(report)
+    assert (fields["busy_replies"], fields["nan_replies"], fields["blocked_moves"]) == (1, 0, 1)
+    assert succeeded("busy_replies == 1 and blocked_moves == 1", report)
+    assert not succeeded("blocked_moves == 0", report)
+
+
+def test_a_summary_states_the_base_configurations_fixed_noise() -> None:
+    """With the lab's bias on, the 0/0 row of an error sweep failed 60 of 60 with no word why:
+    the summary now names every error and bias the sweep leaves as the file has it."""
+    from simmer.sweep.results import fixed_noise
+
+    from helpers import make_config, noisy_data
+
+    config = make_config(noisy_data())
+    fixed = fixed_noise(config, ["drives.w0.error.y", "drives.r0.error.rotation"])
+    assert "`drives.w0.bias.rotation = 0.2`" in fixed
+    assert "`drives.w0.error.x = 0.02`" in fixed
+    assert "`sensors.u0.error = 0.05`" in fixed
+    assert not any("w0.error.y" in item or "r0.error.rotation" in item for item in fixed)
+    assert fixed_noise(make_config(noisy_data()), ["drives", "sensors"]) == []

@@ -23,12 +23,25 @@ from simmer.ui import (
     Window,
     render_scene,
 )
-from simmer.ui.hud import COMMANDS_X, LIT, PATH_X, ROWS, TEXT, VALUE_X, paint_hud
+from simmer.ui.hud import (
+    ALARM,
+    COMMANDS_X,
+    DIAL_RADIUS,
+    DIAL_X,
+    LIT,
+    PATH_X,
+    ROWS,
+    TEXT,
+    VALUE_X,
+    paint_hud,
+)
+from simmer.ui.offscreen import OffscreenRenderer
 from simmer.ui.render import TextCache, merge_rects
 from simmer.ui.scene import PANEL_HEIGHT, default_window_size
 from simmer.view.snapshot import Snapshot, StaticScene
+from simmer.world.outcome import Outcome
 
-from helpers import LAB_SEQUENCE, make_sim, run_sequence
+from helpers import LAB_SEQUENCE, default_data, make_sim, run_sequence
 
 SMALL = """
 walls = [[1, 1]]
@@ -344,3 +357,103 @@ def test_the_hud_shows_what_the_link_model_did_under_the_clients() -> None:
     assert "two-port x" in texts
     assert not any(str(text).startswith("link:") for text in texts)
     bridge.close()
+
+
+def _frame(
+    sim: Simulation, outcome: Outcome | None = None, *, show_help: bool = False
+) -> np.ndarray:
+    """One frame of ``sim`` drawn off screen, as pixels (x, y, rgb)."""
+    offscreen = OffscreenRenderer(StaticScene.of(sim))
+    report = outcome.report() if outcome is not None else None
+    offscreen.draw(Snapshot.of(sim, outcome=report), show_help=show_help)
+    return pygame.surfarray.array3d(offscreen.surface)
+
+
+def test_every_help_line_stays_inside_its_box() -> None:
+    """The help box is as wide as its longest line (the B line once ran past it): every pixel
+    the help changes lies within its frame."""
+    sim = make_sim()
+    changed = (_frame(sim, show_help=True) != _frame(sim)).any(axis=-1)
+    xs, ys = np.nonzero(changed)
+    left, right, top, bottom = xs.min(), xs.max(), ys.min(), ys.max()
+    for edge in (
+        (pixels := _frame(sim, show_help=True))[left, top:bottom],
+        pixels[right, top:bottom],
+    ):
+        assert (edge == LIT).all(axis=-1).all(), "text outside the help's frame"
+    assert (pixels[left:right, top] == LIT).all(axis=-1).all()
+
+
+def test_a_blocked_move_is_drawn_in_red_over_the_robot_and_counted_in_the_hud() -> None:
+    sim = make_sim()
+    outcome = Outcome.attach(sim)
+    free = _frame(sim, outcome)
+    sim.command("w0-60")  # up the first column into the wall
+    sim.run_until_idle()
+    sim.step(30)  # within the two seconds the window keeps showing it
+    assert sim.blocked_now() is not None
+    assert "'w0-60'" in sim.blocked_now()
+    blocked = _frame(sim, outcome)
+    below_panel = slice(PANEL_HEIGHT, None)
+    assert not (free[:, below_panel] == ALARM).all(axis=-1).any()
+    assert (blocked[:, below_panel] == ALARM).all(axis=-1).sum() > 100  # outline and label
+    collisions_row = blocked[VALUE_X:PATH_X, ROWS[3] : ROWS[3] + 16]
+    assert (collisions_row == ALARM).all(axis=-1).any()  # "1, 1 move blocked" in red
+    sim.step(200)
+    assert sim.blocked_now() is None
+
+
+@pytest.mark.parametrize(
+    ("heading", "side"), [(0, "down"), (90, "left"), (180, "up"), (270, "right")]
+)
+def test_the_heading_dial_points_where_the_robot_faces_on_screen(heading: float, side: str) -> None:
+    """Heading 0 faces +y, down the screen; 90 faces -x, left; a positive turn is clockwise."""
+    data = default_data()
+    data["robot_start_rotation"] = heading
+    pixels = _frame(make_sim(data))
+    cx, cy = DIAL_X, ROWS[2] + 9
+    box = pixels[cx - DIAL_RADIUS : cx + DIAL_RADIUS + 1, cy - DIAL_RADIUS : cy + DIAL_RADIUS + 1]
+    xs, ys = np.nonzero((box == TEXT).all(axis=-1))
+    dx, dy = xs.mean() - DIAL_RADIUS, ys.mean() - DIAL_RADIUS
+    expected = {"down": (0, 1), "left": (-1, 0), "up": (0, -1), "right": (1, 0)}[side]
+    assert dx * expected[0] + dy * expected[1] > 2  # the arrow's ink lies on that side
+
+
+def test_the_axes_mark_is_drawn_in_the_rulers_margin_at_the_origin() -> None:
+    sim = make_sim()
+    scene = StaticScene.of(sim)
+    rec = RecordingRenderer()
+    view = View.fit(scene, default_window_size(sim))
+    ScenePainter(scene).paint_static(rec, view, default_window_size(sim))
+    x0, y0 = view.point(0, 0)
+    letters = [call for call in rec.of("text") if call[0] in ("x", "y")]
+    assert len(letters) == 2
+    (_, (xx, xy), *_), (_, (yx, yy), *_) = sorted(letters, key=lambda c: str(c[0]))
+    assert xx > x0 + 20  # right of the origin,
+    assert xy < y0  # above the maze
+    assert yx < x0  # left of the maze,
+    assert yy > y0  # below the origin
+    arrows = [c for c in rec.of("segment") if c[0][0] >= x0 - 20 and c[0][1] <= y0 + 80]
+    assert any(end[0] > start[0] + 20 and end[1] == start[1] for start, end, *_ in arrows)
+    assert any(end[1] > start[1] + 20 and end[0] == start[0] for start, end, *_ in arrows)
+
+
+def test_a_beliefs_label_sits_in_a_box_readable_over_its_cloud() -> None:
+    """A label under a thick particle cloud was purple on purple: it has a light box now."""
+    from simmer.localize.belief import read_belief
+    from simmer.ui.belief import BELIEF_COLOR, LABEL_BACK, paint_belief
+
+    rng = np.random.default_rng(0)
+    particles = [[30 + rng.normal(0, 2), 20 + rng.normal(0, 2), rng.uniform(0, 360), 1.0]
+                 for _ in range(3000)]  # fmt: skip
+    belief, _ = read_belief({"particles": particles, "labels": [[30, 20, "here"]]})
+    surface = pygame.Surface((800, 500))
+    view = View(16.0, 0.0, 0.0)
+    paint_belief(PygameRenderer(surface), view, belief, (96.0, 48.0))
+    pixels = pygame.surfarray.array3d(surface)
+    x, y = (round(v) for v in view.point(30, 20))
+    around = pixels[x - 20 : x + 20, y - 6 : y + 6]
+    back = (around == LABEL_BACK).all(axis=-1).mean()
+    ink = (around == BELIEF_COLOR).all(axis=-1).mean()
+    assert back > 0.4  # the box behind the text, not the cloud
+    assert 0.02 < ink < 0.6  # the text itself, on it

@@ -394,3 +394,23 @@ def test_ctrl_c_finishes_the_video(tmp_path: Path) -> None:
     frames, _, length = decoded(path)
     assert abs(len(frames) - (int(simulated * FPS + 1e-6) + 1)) <= 1  # Ctrl-C may cut one
     assert abs(length - simulated) <= 1 / FPS + 0.005  # the time is said to 0.01 s
+
+
+def test_a_video_of_a_run_without_a_window_shows_no_keys_and_no_speed(tmp_path: Path) -> None:
+    """A headless run's video showed "speed max" and key caps nobody could press."""
+    frames = {}
+    for window in (True, False):
+        sim = Simulation.from_config()
+        sim.manual_keys = frozenset("w")  # a key held: lit in a window's frame
+        with VideoRecorder(sim, tmp_path / f"{window}.gif", fps=10, window=window) as recorder:
+            sim.step(12)
+        frames[window] = pygame.surfarray.array3d(recorder.canvas.surface)
+        hud = RecordingRenderer()
+        paint_hud(hud, recorder.maker.snapshot(recorder.controls), keys=window)
+        texts = [str(call[0]) for call in hud.of("text")]
+        time_line = next(text for text in texts if text.startswith(f"{sim.time:.2f} s"))
+        assert ("speed" in time_line) is window, time_line
+    caps = (slice(40, 150), slice(8, 100))  # where the window's key caps and help hint are
+    panel = frames[False][caps]
+    assert (panel == panel[0, 0]).all()  # the bare panel: no cap, no glyph
+    assert not (frames[True][caps] == frames[True][caps][0, 0]).all()

@@ -13,6 +13,7 @@ import math
 import os
 import threading
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
@@ -34,7 +35,8 @@ from simmer.transport import Transports
 from simmer.ui import Bridge, RecordingRenderer, Window, run_window
 from simmer.ui.belief import BELIEF_COLOR, ESTIMATE_COLOR
 from simmer.ui.bridge import Controls, PlaceRobot
-from simmer.ui.hud import HELP, LIT, TEXT, paint_hud
+from simmer.ui.hud import ALARM, HELP, LIT, TEXT, paint_hud
+from simmer.ui.scene import default_window_size
 from simmer.ui.window import LocalControls, faster, slower
 from simmer.world.outcome import Outcome, OutcomeReport
 
@@ -440,7 +442,8 @@ def test_hud_shows_the_runs_outcome(window: Window) -> None:
     outcome = shown_outcome(window)
     assert outcome.collisions == 1
     assert outcome.first_collision is not None
-    assert f"1 (first at {outcome.first_collision:.2f} s)" in hud_texts(window)
+    assert outcome.blocked_moves == 1  # the move into the wall went part of its way
+    assert hud_texts(window)["1, 1 move blocked"] == ALARM
 
 
 def test_run_window_quits_on_escape(caplog: pytest.LogCaptureFixture) -> None:
@@ -570,3 +573,18 @@ def test_the_window_says_one_thing_when_no_screen_is_found(
         echo=said.append,
     )
     assert "window open (press h for help)" in said
+
+
+def test_the_screenshots_file_is_said_in_the_terminal_too(tmp_path: Path) -> None:
+    """Under --program the log goes to a file: the screenshot's path was only there."""
+    sim = Simulation.from_config()
+    said: list[str] = []
+    bridge = Bridge(sim, echo=said.append)
+    window = Window(bridge, surface=pygame.Surface(default_window_size(sim)), save_dir=tmp_path)
+    tick(window)
+    key(pygame.K_p, unicode="p")
+    tick(window)
+    (png,) = tmp_path.glob("simmer-*.png")
+    assert said == [f"saved the screenshot {png}"]
+    window.close()
+    bridge.close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import pickle
 import subprocess
@@ -11,7 +12,8 @@ from typing import Any
 import pytest
 
 from simmer import Simulation
-from simmer.world import (
+from simmer.world.events import (
+    BlockedMoveEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
@@ -19,6 +21,7 @@ from simmer.world import (
     ResetEvent,
     StepEvent,
 )
+from simmer.world.outcome import Outcome
 
 from helpers import EXAMPLES, LAB_SEQUENCE, default_data, make_sim, run_sequence
 
@@ -129,7 +132,9 @@ def test_observers_see_commands_steps_collisions_and_resets() -> None:
     sim.run_until_idle()
     sim.reset()
     kinds = {type(e) for e in events}
-    assert kinds == {CommandEvent, StepEvent, CollisionEvent, CollisionEndEvent, ResetEvent}
+    assert kinds == {
+        CommandEvent, StepEvent, CollisionEvent, CollisionEndEvent, BlockedMoveEvent, ResetEvent
+    }  # fmt: skip
     command = next(e for e in events if isinstance(e, CommandEvent))
     assert (command.message, command.replies) == ("w0-60", (math.inf,))
     assert sum(isinstance(e, CollisionEvent) for e in events) == 1
@@ -182,3 +187,47 @@ def test_the_simulation_core_never_imports_pygame() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert done.stdout.strip() == "[]"
+
+
+def test_a_blocked_move_says_which_command_when_and_how_far_it_got(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    sim = make_sim()
+    outcome = Outcome.attach(sim)
+    blocked: list[BlockedMoveEvent] = []
+    sim.add_observer(lambda e: blocked.append(e) if isinstance(e, BlockedMoveEvent) else None)
+    assert sim.command("w0-6") == [math.inf]
+    sim.run_until_idle()
+    assert blocked == []  # a free move is no blocked move
+    started, y_before = sim.time, sim.robot.pose.y
+    with caplog.at_level(logging.INFO, logger="simmer"):
+        assert sim.command("w0-60") == [math.inf]  # the reply stays the original's
+        sim.run_until_idle()
+    (event,) = blocked
+    assert (event.command, event.started, event.unit, event.amount) == ("w0-60", started, "in", 60)
+    assert event.blocked_steps == sim.blocked_steps > 0
+    assert 0 < event.done < 60
+    assert abs(event.done - (y_before - sim.robot.pose.y)) < 1e-6  # the inches it really went
+    assert event.time == sim.time  # said when the command's time was up
+    said = f"blocked move: 'w0-60' at {started:.2f} s was blocked for {event.blocked_steps} steps"
+    assert said in caplog.text
+    report = outcome.report()
+    assert report.blocked_moves == sim.blocked_moves == 1
+    assert report.first_blocked_move == event.describe()
+    assert f"blocked moves 1: first {event.describe()}" in report.summary()
+
+
+def test_a_turn_stopped_by_xx_against_a_wall_is_a_blocked_move_too() -> None:
+    data = default_data()
+    data["robot_start_position"] = [3.5, 42.0]  # turned, the rover's 4 in ends reach the wall
+    sim = make_sim(data)
+    sim.command("r0-90")
+    sim.step(10)
+    sim.command("xx")
+    assert sim.blocked_moves == 1
+    assert sim.last_blocked is not None
+    assert sim.last_blocked.unit == "deg"
+    blocked = sim.last_blocked.blocked_steps
+    assert 0 < blocked < 10
+    assert sim.last_blocked.done == pytest.approx(2.0 * (10 - blocked))  # 2 deg a free step
+    assert "(9%)" in sim.last_blocked.describe()

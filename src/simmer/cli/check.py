@@ -11,7 +11,7 @@ from typing import Annotated, NoReturn
 import typer
 from rich.text import Text
 
-from simmer.cli.app import Command, app, example, out
+from simmer.cli.app import Command, app, err, example, out
 from simmer.cli.common import report_config_error, report_config_warnings
 from simmer.errors import ConfigError, ExitCalled
 
@@ -45,7 +45,31 @@ def check(
         report_config_error(ConfigError(config, placed_issues(config, issues)))
         raise typer.Exit(1)
     out.print(Text.assemble(("OK", "bold green"), f" {config}"))
-    out.print(summarize(loaded), markup=False)
+    ports = _ports(loaded.settings.port_rx, loaded.settings.port_tx)
+    out.print(summarize(loaded, ports=ports), markup=False)
+    if ports is None:
+        out.print("Ports: free ones, printed when simmer run starts (SIMMER_PORTS=auto).")
+    out.print(
+        "Other ports for every command, the client and the examples: SIMMER_PORTS=62000 "
+        "(62000-62002) in the terminal's environment, or simmer run --ports 62000 "
+        "(--ports auto: free ones, printed).",
+        markup=False,
+    )
+
+
+def _ports(port_rx: int, port_tx: int) -> tuple[int, int, int] | None:
+    """The three ports ``simmer run`` would serve on in this terminal: ``SIMMER_PORTS``'s if
+    it names them (it is checked: a wrong one is a plain line and exit status 1; ``auto`` is
+    None, free ones chosen at start), else the configuration's and SimMeR's persistent one."""
+    from simmer.errors import PortsError
+    from simmer.ports import Ports, environment_ports
+
+    try:
+        chosen = environment_ports() or Ports()
+    except PortsError as exc:
+        err.print(str(exc), style="bold red", markup=False)
+        raise typer.Exit(1) from None
+    return None if chosen == Ports.free() else chosen.resolve(port_rx, port_tx)
 
 
 @contextlib.contextmanager

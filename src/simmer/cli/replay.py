@@ -110,7 +110,7 @@ def load_comparison(
 @app.command(
     cls=Command,
     short_help="Replay recorded runs (several: side by side) or --check them.",
-    epilog=example("simmer replay runs/bias")
+    epilog=example("simmer replay runs/bias", "simmer replay --check runs/*")
     + "\n\n"
     + example("simmer replay grading-results/runs/Team-1_seed1 grading-results/runs/Team-2_seed1"),
 )
@@ -132,13 +132,15 @@ def replay(
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
     if not). Several run folders of the same maze are shown side by side: one colour each, a
-    legend, one timeline, a red cross on a robot once it has collided."""
+    legend, one timeline, a red cross on a robot once it has collided. With --check, every
+    folder given is checked in turn (a TA's whole class at once): exit status 1 if any
+    differs or cannot be replayed, and a last line counting them."""
+    if check:
+        raise typer.Exit(_check_all(folders, trust, plugin, max_seconds))
     if len(folders) > 1:
-        _replay_several(folders, check, trust, plugin, max_seconds)
+        _replay_several(folders, trust, plugin, max_seconds)
         return
     recording = load_recording(folders[0], trust, plugin, max_seconds)
-    if check:
-        raise typer.Exit(0 if recording.check.matches else 1)
     from simmer.errors import SimmerError
     from simmer.ui.replay import run_replay
 
@@ -150,16 +152,10 @@ def replay(
 
 
 def _replay_several(
-    folders: list[Path],
-    check: bool,
-    trust: bool,
-    plugins: list[Path] | None,
-    max_seconds: float | None,
+    folders: list[Path], trust: bool, plugins: list[Path] | None, max_seconds: float | None
 ) -> None:
-    """``simmer replay RUN_A RUN_B ...``: the runs side by side (or only --check each)."""
+    """``simmer replay RUN_A RUN_B ...``: the runs side by side."""
     comparison = load_comparison(folders, trust, plugins, max_seconds)
-    if check:
-        raise typer.Exit(0 if comparison.matches else 1)
     from simmer.errors import SimmerError
     from simmer.ui.compare import run_compare
 
@@ -168,3 +164,25 @@ def _replay_several(
     except SimmerError as exc:
         err.print(str(exc), style="bold red", markup=False)
         raise typer.Exit(1) from None
+
+
+def _check_all(
+    folders: list[Path], trust: bool, plugins: list[Path] | None, max_seconds: float | None
+) -> int:
+    """``--check`` of each folder in turn, each one's lines as for one; the exit status (1 if
+    any differs or cannot be replayed), with a count at the end when there are several."""
+    failed: list[Path] = []
+    for folder in folders:
+        try:
+            matches = load_recording(folder, trust, plugins, max_seconds).check.matches
+        except typer.Exit:
+            matches = False
+        if not matches:
+            failed.append(folder)
+    if len(folders) > 1:
+        line = f"{len(folders) - len(failed)} of {len(folders)} runs match their recordings"
+        if failed:
+            err.print(f"{line}; not: {', '.join(map(str, failed))}", style="bold red", markup=False)
+        else:
+            out.print(line, markup=False)
+    return 1 if failed else 0

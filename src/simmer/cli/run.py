@@ -118,6 +118,17 @@ Port = Annotated[
         metavar="PORT",
     ),
 ]
+PortsFlag = Annotated[
+    str | None,
+    typer.Option(
+        "--ports",
+        help="All three ports at once: N (N, N+1, N+2), RX,TX,PORT, or auto (free ones, "
+        "printed); default: SIMMER_PORTS if set, else the configuration's (61200, 61201, "
+        "61202). --port-rx, --port-tx and --port still set one each.",
+        show_default=False,
+        metavar="N|RX,TX,PORT|auto",
+    ),
+]
 Serial = Annotated[
     bool,
     typer.Option("--serial", help="Also serve a virtual serial port (a pseudo-terminal)."),
@@ -278,6 +289,7 @@ def run(
     port_rx: PortRx = None,
     port_tx: PortTx = None,
     port: Port = None,
+    ports: PortsFlag = None,
     serial: Serial = False,
     serial_link: SerialLink = None,
     lidar_serial: LidarSerial = False,
@@ -309,6 +321,7 @@ def run(
             port_rx=port_rx,
             port_tx=port_tx,
             port=port,
+            ports=ports,
             serial=serial,
             serial_link=serial_link,
             lidar_serial=lidar_serial,
@@ -412,7 +425,7 @@ def _run_simulation(loaded: SimConfig, seed: int | None) -> Simulation:
     report_config_warnings(loaded)
     if loaded.origin:
         out.print(loaded.origin, markup=False)
-    out.print(summarize(sim.config, seed=sim.seed, ports=False), markup=False)
+    out.print(summarize(sim.config, seed=sim.seed), markup=False)
     if project_run(loaded):
         out.print(f"scenario: {sim.scenario.describe()}", markup=False)
     return sim
@@ -574,7 +587,8 @@ def _serve_failure(exc: OSError, host: str) -> str:
     if exc.errno == errno.EADDRINUSE:
         return (
             f"cannot serve: {exc}. Another simmer run (or another program) is using this port: "
-            "close it, or choose other ports with --port-rx, --port-tx and --port"
+            "close it, or choose other ports: --ports 62000 (62000-62002), --ports auto, or "
+            "SIMMER_PORTS=62000 in this terminal's environment"
         )
     if ":" in host:  # an IPv6 address, and the servers listen on IPv4 (AF_INET) sockets
         return (

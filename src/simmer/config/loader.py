@@ -168,11 +168,13 @@ def _toml_data(text: str, source: str) -> dict[str, Any]:
 # ----------------------------------------------------------------------------- summary
 
 
-def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True) -> str:
+def summarize(
+    config: SimConfig, *, seed: int | None = None, ports: tuple[int, int, int] | None = None
+) -> str:
     """One paragraph describing what a configuration sets up (for ``simmer check`` and the
     start of ``simmer run``): the noise as configured, with ``seed`` (default: the
-    configuration's), and the two-port scheme's ports unless ``ports`` is False (a run says the
-    ports it actually serves on its own lines)."""
+    configuration's), and the three ``ports`` (two-port message and reply, persistent) if given
+    (a run says the ports it actually serves on its own lines)."""
     s = config.settings
     rows, cols = len(s.walls), len(s.walls[0])
     length = s.wall_segment_length
@@ -184,7 +186,12 @@ def summarize(config: SimConfig, *, seed: int | None = None, ports: bool = True)
         + (f" ({', '.join(groups[g])})" if groups[g] else "")
         for g in DEVICE_GROUPS
     ]
-    served = f"; SimMeR TCP on {s.host}:{s.port_rx}/{s.port_tx}" if ports else ""
+    served = (
+        f"; on {s.host} ports {ports[0]} (two-port messages), {ports[1]} (two-port replies) "
+        f"and {ports[2]} (persistent, simmer.client)"
+        if ports
+        else ""
+    )
     block = (
         f"at {list(s.block_position)}"
         if s.scenario.block == "config"

@@ -24,6 +24,18 @@ MAP_VERSION = 1
 """Bumped when a key changes meaning (new keys may be added without it)."""
 
 
+FRAME = (
+    ("x", "inches, to the right in the window, from the maze's left edge"),
+    ("y", "inches, down the window, from the maze's top edge (row 0 at y = 0)"),
+    ("heading", "degrees from +y: 0 faces +y (down), 90 faces -x (left), 180 -y, 270 +x"),
+    ("positive_turn", "the heading grows: clockwise as the window shows it (y grows downward)"),
+    ("move", "d inches at heading h: dx = -d sin h, dy = d cos h"),
+    ("robot_frame", "+y forward, +x the robot's left"),
+)
+"""The coordinate frame in words, key by key (the map's ``frame``): the same words as the
+docs' (README's Coordinates), so that a program reading the map needs no screenshot."""
+
+
 def _rounded(values: Any) -> list[float]:
     return [round(float(v), 6) for v in values]
 
@@ -104,7 +116,8 @@ def map_data(sim: Simulation) -> dict[str, Any]:
     start = sim.robot.start_pose if fixed else None
     return {
         "version": MAP_VERSION,
-        "units": "inches, degrees counter-clockwise from +y",
+        "units": "inches; degrees from +y, growing clockwise in the window (y down)",
+        "frame": dict(FRAME),
         "walls": [list(row) for row in settings.walls],
         "maze": _maze_setting(settings.maze),
         "rows": maze.rows,

@@ -42,7 +42,7 @@ from simmer.errors import ProgramNotFound
 if TYPE_CHECKING:
     from simmer.lockstep.box import Box
 from simmer.lockstep.gate.sitecustomize import OLDEST_PYTHON as OLDEST_PYTHON
-from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT
+from simmer.ports import PORT_RX, PORT_TX, PORTS_VARIABLE, STREAM_PORT
 
 SHIM = Path(__file__).resolve().parent / "shim"
 """The folder whose ``sitecustomize.py`` puts a Python program on the simulated clock."""
@@ -82,7 +82,8 @@ def program_environment(
     ``ports`` maps ``port_rx``, ``port_tx`` and ``stream`` to the ports this run serves on;
     connections to SimMeR's standard ports, and to the ports the configuration names
     (``configured``, same keys), are sent there. ``simmer.client`` reads ``SIMMER_HOST``,
-    ``SIMMER_PORT``, ``SIMMER_PORT_RX`` and ``SIMMER_PORT_TX``; the shim reads
+    ``SIMMER_PORT``, ``SIMMER_PORT_RX`` and ``SIMMER_PORT_TX`` (and ``SIMMER_PORTS``, set to
+    all three, as the examples' raw sockets do); the shim reads
     ``SIMMER_LOCKSTEP``, ``SIMMER_PORT_MAP``, ``SIMMER_MESSAGE_PORTS`` and
     ``SIMMER_REPLY_PORTS``.
     """
@@ -101,6 +102,7 @@ def program_environment(
     env["SIMMER_PORT"] = str(ports["stream"])
     env["SIMMER_PORT_RX"] = str(ports["port_rx"])
     env["SIMMER_PORT_TX"] = str(ports["port_tx"])
+    env[PORTS_VARIABLE] = f"{ports['port_rx']},{ports['port_tx']},{ports['stream']}"
     env["PYTHONUNBUFFERED"] = "1"  # the program's printout appears as it happens
     return env
 

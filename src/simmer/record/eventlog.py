@@ -34,6 +34,7 @@ from simmer.geometry import Pose
 from simmer.options import MAX_RECORDING_BYTES
 from simmer.world.events import (
     BeliefEvent,
+    BlockedMoveEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
@@ -52,6 +53,7 @@ TYPE_NAMES: dict[type[Event], str] = {
     StepEvent: "step",
     CollisionEvent: "collision",
     CollisionEndEvent: "collision-end",
+    BlockedMoveEvent: "blocked-move",
     ResetEvent: "reset",
     KeysEvent: "keys",
     PlaceEvent: "place",

@@ -13,12 +13,15 @@ import statistics
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from simmer.ending import RunEnd
 from simmer.record.safefile import check_folder, check_target, replacing, write_bytes, write_text
 from simmer.sweep.runs import RunResult, RunSpec
 from simmer.sweep.spec import SweepSpec
+
+if TYPE_CHECKING:
+    from simmer.config import SimConfig
 from simmer.sweep.success import (
     FAILURES,
     OUTCOME_FIELDS,
@@ -282,6 +285,7 @@ def write_summary(
         f"Overall success {total}/{len(rows)} = {_rate(total, len(rows))} "
         f"(95% Wilson interval {low:.3f} to {high:.3f}).",
         "",
+        *_fixed_noise(spec),
         *_localized(rows),
         "| "
         + " | ".join(
@@ -322,6 +326,48 @@ def write_summary(
     path = folder / "summary.md"
     write_text(path, "\n".join(lines) + "\n", run_folder=False)
     return path
+
+
+def fixed_noise(config: SimConfig, swept: Sequence[str]) -> list[str]:
+    """The base configuration's noise that no key of the sweep changes, each as a dotted key
+    and its value (``drives.w0.bias.rotation = 0.2``): every run has it, whatever the grid
+    says, so a row of zeros is not noise-free when this is not empty."""
+    from pydantic import BaseModel
+
+    fixed = []
+    for device in config.devices:
+        for name in ("error", "bias"):
+            value = getattr(device.params, name, 0.0)
+            parts = value.model_dump() if isinstance(value, BaseModel) else {"": value}
+            for axis, number in parts.items():
+                key = f"{device.group}.{device.id}.{name}" + (f".{axis}" if axis else "")
+                if number != 0 and not any(key.startswith(k) or k.startswith(key) for k in swept):
+                    fixed.append(f"`{key} = {number:g}`")
+    settings = config.settings
+    if settings.rand_bias and any(settings.bias_strength) and "rand_bias" not in swept:
+        fixed.append(f"`rand_bias = true` (strength `{list(settings.bias_strength)}`)")
+    return fixed
+
+
+def _fixed_noise(spec: SweepSpec) -> list[str]:
+    """A line saying the base configuration's fixed noise (or that it has none)."""
+    from simmer.config import load_config
+    from simmer.errors import ConfigError
+
+    try:
+        config = load_config(spec.configs[0])
+    except (ConfigError, OSError):  # the runs said so, each in its row
+        return []
+    swept = [key for key, _ in spec.grid] + [key for key, _ in spec.sample]
+    fixed = fixed_noise(config, swept)
+    if not fixed:
+        return ["The base configuration has no other noise: every error and bias the sweep does "
+                "not set is 0.", ""]  # fmt: skip
+    return [
+        f"In every run, whatever the setting, the base configuration ({spec.configs[0].name}) "
+        f"adds this noise the sweep does not change: {', '.join(fixed)}.",
+        "",
+    ]
 
 
 def _localized(rows: Sequence[Mapping[str, str]]) -> list[str]:

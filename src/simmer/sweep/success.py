@@ -40,6 +40,8 @@ OUTCOME_FIELDS = (
     "messages",
     "commands",
     "nan_replies",
+    "busy_replies",
+    "blocked_moves",
     "final_x",
     "final_y",
     "final_heading",

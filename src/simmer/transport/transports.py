@@ -8,6 +8,7 @@ import logging
 from simmer.config.models import SimConfig
 from simmer.errors import SimmerError
 from simmer.options import RunOptions
+from simmer.ports import PORT_RX, PORT_TX, STREAM_PORT, export_line
 from simmer.transport.bus import ByteCounter, CommandBus
 from simmer.transport.link import Link
 from simmer.transport.rplidar_pty import RPLidarServer
@@ -48,6 +49,8 @@ class Transports:
         self.link_model = link_model
         options = options if options is not None else RunOptions()
         self.host = options.host if options.host is not None else settings.host
+        self._by_hand = options.program is None
+        """No program is started here: a moved port is told to other terminals."""
         port_rx, port_tx, stream_port = options.ports.resolve(settings.port_rx, settings.port_tx)
         if not is_loopback(self.host):
             log.warning(
@@ -137,6 +140,9 @@ class Transports:
                 f"virtual RPLidar:     {self.lidar.path} (LiDAR {self.lidar.device}, Slamtec's "
                 "protocol: RPLidar(port).iter_scans())"
             )
+        served = (self.two_port.port_rx, self.two_port.port_tx, self.stream.port)
+        if self._by_hand and served != (PORT_RX, PORT_TX, STREAM_PORT):
+            lines.append(export_line(*served))
         return lines
 
     def close(self) -> None:

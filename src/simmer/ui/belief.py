@@ -18,6 +18,11 @@ BELIEF_COLOR: Color = (140, 40, 200)
 ESTIMATE_COLOR: Color = (230, 0, 140)
 """The pose estimate and its ellipse: magenta, over the purple cloud."""
 PATH_COLOR: Color = (40, 90, 220)
+LABEL_BACK: Color = (250, 248, 255)
+"""A label's box: a label is usually where the cloud is thickest, where purple on purple
+could not be read."""
+LABEL_LETTER = 0.5
+"""A letter's width in em, generously: the box is wider than its text, never narrower."""
 PARTICLE_LENGTH = 1.5
 """Inches of a particle's heading tick."""
 
@@ -64,4 +69,9 @@ def paint_belief(r: Renderer, view: View, belief: Belief, size: tuple[float, flo
         r.draw_segment(centre, tip, ESTIMATE_COLOR, 3)
     size_px = max(16, round(view.ppi * 1.1))
     for x, y, text in belief.labels:
-        r.draw_text(text, view.point(x, y), BELIEF_COLOR, size_px, centered=True)
+        cx, cy = view.point(x, y)
+        width, height = len(text) * size_px * LABEL_LETTER + 8, size_px + 4
+        box = (cx - width / 2, cy - height / 2, width, height)
+        r.draw_rect(box, LABEL_BACK)
+        r.draw_rect(box, BELIEF_COLOR, 1)
+        r.draw_text(text, (cx, cy), BELIEF_COLOR, size_px, centered=True)

@@ -17,6 +17,7 @@ import logging
 import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -155,8 +156,11 @@ class Bridge:
     :meth:`post` and :attr:`latest` may be used from the window thread.
     """
 
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: Simulation, echo: Callable[[str], None] | None = None) -> None:
         self.sim = sim
+        self.echo = echo
+        """Where notices are said too (the terminal ``simmer run`` prints to, which a
+        ``--program`` run's log file is not): a screenshot's or a video's file."""
         self.scene = StaticScene.of(sim)
         """Configuration and maze: safe to read from any thread."""
         self.local = LocalControls(sim)
@@ -242,8 +246,10 @@ class Bridge:
             self._say(action.text)
 
     def _say(self, text: str) -> None:
-        """Show ``text`` in the HUD for a while."""
+        """Show ``text`` in the HUD for a while, and say it through :attr:`echo`."""
         self._notice = (text, time.monotonic() + NOTICE_SECONDS)
+        if self.echo is not None:
+            self.echo(text)
 
     def _notice_text(self) -> str | None:
         """The HUD's notice: the video being recorded, else the last notice for a while."""
@@ -261,6 +267,8 @@ class Bridge:
             self._say(f"cannot record a video into {path}: {exc}")
         else:
             log.info("recording a video into %s (V stops it)", path)
+            if self.echo is not None:
+                self.echo(f"recording a video into {path} (V stops it)")
 
     def _stop_video(self) -> None:
         video, self.video = self.video, None

@@ -1,6 +1,7 @@
 """The heads-up display: heartbeat, key lights, time, the run's outcome (Task 2 stopwatch,
-collisions, path length, busy and NaN replies), pose, commands, help, the file a screenshot or
-video went to, and a red warning for each device switched off because its code raised.
+collisions and blocked moves, path length, busy and NaN replies), pose, commands, help, the
+file a screenshot or video went to, and a red warning for each device switched off because its
+code raised; a blocked move is also drawn over the maze (:func:`paint_blocked`).
 
 The outcome is the simulation's own :class:`~simmer.world.outcome.Outcome` (the figures a
 headless run prints); it and :class:`~simmer.view.commands.CommandLog` observe the simulation
@@ -15,7 +16,7 @@ from collections.abc import Sequence
 
 from simmer.colors import TRAIL_COLOR, Color, tint
 from simmer.ui.render import Renderer
-from simmer.ui.scene import PANEL_HEIGHT
+from simmer.ui.scene import PANEL_HEIGHT, View
 from simmer.view.commands import RepeatedCommand
 from simmer.view.snapshot import HasScene, Snapshot
 from simmer.world.outcome import OutcomeReport
@@ -54,7 +55,12 @@ HELP = (
     ("reached", "the robot's outline within 1 in of the block's"),
     ("stopwatch", "Task 2: from the first motion until reached"),
     ("busy", "a drive command refused while a drive moves"),
+    ("blocked", "a drive command a wall or the block stopped (red over the robot)"),
+    ("axes", "x right, y down; heading 0 faces +y (down), 90 faces -x (left)"),
+    ("turns", "a positive r0 turns clockwise on screen (heading grows)"),
 )
+HELP_WHAT_X = 140
+"""Where the help's second column starts, from the box's left edge."""
 
 
 def reply_text(value: float) -> str:
@@ -77,6 +83,9 @@ ROWS = (10, 36, 62, 88)
 PATH_LABEL_X = 490
 """The path length sits beside the collisions, in the last row."""
 PATH_X = 530
+DIAL_X = 662
+"""The heading dial's centre, after the pose's text and before the commands."""
+DIAL_RADIUS = 9
 COMMANDS_X = 700
 REPLIES_X = COMMANDS_X + 200
 """Reply counts, beside the commands' heading."""
@@ -114,11 +123,14 @@ def legend(scene: HasScene) -> list[tuple[Color, str]]:
     return items
 
 
-def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
-    """The HUD's fixed parts: unlit key caps, labels, colour legend (painted once)."""
-    for key in MANUAL_KEYS:
-        _key_cap(r, key, lit=False)
-    r.draw_text("h: help", (12, 78), DIM, 20)
+def paint_hud_static(r: Renderer, scene: HasScene, width: int, *, keys: bool = True) -> None:
+    """The HUD's fixed parts: unlit key caps (unless ``keys`` is False: a video of a run
+    without a window, where no key was there to press), labels, colour legend (painted
+    once)."""
+    if keys:
+        for key in MANUAL_KEYS:
+            _key_cap(r, key, lit=False)
+        r.draw_text("h: help", (12, 78), DIM, 20)
     from simmer.config.zones import project_run
 
     second = "project" if project_run(scene.config) else "Task 2 stopwatch"
@@ -135,18 +147,21 @@ def paint_hud_static(r: Renderer, scene: HasScene, width: int) -> None:
         r.draw_text(label, (x + 22, y), TEXT, 20)
 
 
-def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
+def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None, *, keys: bool = True) -> None:
     """The HUD's changing values; everything in simulated time. ``width``: the surface's, if
-    long lines must be cut to fit it."""
+    long lines must be cut to fit it. ``keys`` False (a video of a run without a window): no
+    key lights and no speed (the video plays in real time, whatever the run's speed was)."""
     # Heartbeat: fades from white once per simulated second (slower flashing = falling behind).
     r.draw_rect((12, 12, 28, 28), tint((255, 255, 255), snap.time % 1.0, UNLIT))
-    for key in sorted(snap.held):
-        _key_cap(r, key, lit=True)
+    if keys:
+        for key in sorted(snap.held):
+            _key_cap(r, key, lit=True)
 
     paused = snap.paused
     state = "PAUSED (Space resumes)" if paused else "running"  # ends before the commands
+    speed = f"   speed {speed_text(snap.speed)}   {state}" if keys else ""
     r.draw_text(
-        f"{snap.time:.2f} s   speed {speed_text(snap.speed)}   {state}",
+        f"{snap.time:.2f} s{speed}",
         (VALUE_X, ROWS[0]),
         LIT if paused else TEXT,
         22,
@@ -158,6 +173,7 @@ def paint_hud(r: Renderer, snap: Snapshot, width: int | None = None) -> None:
         TEXT,
         22,
     )
+    paint_heading_dial(r, pose.heading, (DIAL_X, ROWS[2] + 9))
     if snap.outcome is not None:
         paint_outcome(r, snap.outcome)
 
@@ -241,9 +257,12 @@ def paint_outcome(r: Renderer, outcome: OutcomeReport) -> None:
     watch, color = stopwatch_text(outcome) if outcome.project is None else project_text(outcome)
     r.draw_text(watch, (VALUE_X, ROWS[1]), color, 22 if outcome.project is None else 20)
     collisions = str(outcome.collisions)
-    if outcome.first_collision is not None:
+    if outcome.blocked_moves:  # what a student must see first: moves that went nowhere
+        moves = "move" if outcome.blocked_moves == 1 else "moves"
+        collisions += f", {outcome.blocked_moves} {moves} blocked"
+    elif outcome.first_collision is not None:
         collisions += f" (first at {outcome.first_collision:.2f} s)"
-    r.draw_text(collisions, (VALUE_X, ROWS[3]), TEXT, 22)
+    r.draw_text(collisions, (VALUE_X, ROWS[3]), ALARM if outcome.blocked_moves else TEXT, 22)
     r.draw_text(f"{outcome.path_length:.1f} in", (PATH_X, ROWS[3]), TEXT, 22)
     replies = "reply" if outcome.commands == 1 else "replies"
     r.draw_text(
@@ -271,6 +290,41 @@ def paint_link(r: Renderer, link: dict[str, float], y: int) -> None:
         TEXT,
         18,
     )
+
+
+def paint_heading_dial(r: Renderer, heading: float, center: tuple[float, float]) -> None:
+    """A small dial beside the pose: an arrow pointing where the robot faces on screen
+    (heading 0 is +y, down the screen; 90 is -x, to the left; a positive turn is clockwise
+    on screen), so the number and the picture say the same."""
+    rad = math.radians(heading)
+    dx, dy = -math.sin(rad), math.cos(rad)  # the robot's +y in the world; y is down on screen
+    cx, cy = center
+    r.draw_circle(center, DIAL_RADIUS, DIM, 1)
+    tip = (cx + dx * DIAL_RADIUS, cy + dy * DIAL_RADIUS)
+    r.draw_segment((cx - dx * 4, cy - dy * 4), tip, TEXT, 2)
+    side = (-dy * 3.5, dx * 3.5)
+    back = (tip[0] - dx * 5, tip[1] - dy * 5)
+    r.draw_polygon(
+        [tip, (back[0] + side[0], back[1] + side[1]), (back[0] - side[0], back[1] - side[1])],
+        TEXT,
+    )
+
+
+def paint_blocked(r: Renderer, view: View, snap: Snapshot) -> None:
+    """A blocked move over the maze: the robot's outline in red and, above it, which command
+    a wall or the block stops and how far it got (its reply was +inf, accepted, as the
+    original's: this is where a student sees that it went nowhere)."""
+    if snap.blocked is None:
+        return
+    points = view.points(snap.outline)
+    r.draw_polygon(points, ALARM, 3)
+    x = sum(p[0] for p in points) / len(points)
+    top = min(p[1] for p in points)
+    width = int(len(snap.blocked) * 18 * LETTER) + 12
+    box = (int(x - width / 2), int(top - 30), width, 22)
+    r.draw_rect(box, BOX)
+    r.draw_rect(box, ALARM, 1)
+    r.draw_text(snap.blocked, (x, top - 19), ALARM, 18, centered=True)
 
 
 def paint_switched_off(
@@ -304,7 +358,9 @@ def paint_switched_off(
 
 def paint_help(r: Renderer, size: tuple[int, int], keys: Sequence[tuple[str, str]] = HELP) -> None:
     """The list of ``keys`` (key, what it does), in a box over the maze."""
-    width, height = 560, 44 + 26 * len(keys)
+    longest = max((len(what) for _, what in keys), default=0)
+    width = max(560, HELP_WHAT_X + int(longest * 22 * LETTER) + 24)  # every line inside
+    height = 44 + 26 * len(keys)
     x0 = max(0, (size[0] - width) // 2)
     y0 = max(PANEL_HEIGHT, (size[1] - height) // 2)
     r.draw_rect((x0, y0, width, height), BOX)
@@ -313,4 +369,4 @@ def paint_help(r: Renderer, size: tuple[int, int], keys: Sequence[tuple[str, str
     for i, (key, what) in enumerate(keys):
         y = y0 + 42 + 26 * i
         r.draw_text(key, (x0 + 16, y), LIT, 22)
-        r.draw_text(what, (x0 + 140, y), TEXT, 22)
+        r.draw_text(what, (x0 + HELP_WHAT_X, y), TEXT, 22)

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import pygame
 
 from simmer.ui.belief import paint_belief
-from simmer.ui.hud import HELP, paint_help, paint_hud, paint_hud_static
+from simmer.ui.hud import HELP, paint_blocked, paint_help, paint_hud, paint_hud_static
 from simmer.ui.render import PygameRenderer, TextCache, merge_rects
 from simmer.ui.scene import ScenePainter, View, default_window_size
 from simmer.view.snapshot import HasScene, Snapshot
@@ -63,6 +63,7 @@ class OffscreenRenderer:
         *,
         show_trail: bool = True,
         show_belief: bool = True,
+        keys: bool = True,
     ) -> None:
         self.scene = scene
         if surface is None:
@@ -71,6 +72,8 @@ class OffscreenRenderer:
         self.renderer = PygameRenderer(self.surface, text)
         self.painter = ScenePainter(scene)
         self.view = View(1.0, 0.0, 0.0)
+        self.keys = keys
+        """Draw the window's key caps, help hint and speed (False: a headless run's video)."""
         self.show_trail = show_trail
         self.show_belief = show_belief
         """Draw the program's belief (``robot.show``) when the snapshot has one."""
@@ -94,7 +97,7 @@ class OffscreenRenderer:
         self.static = static_layer(size, self.surface)
         static = PygameRenderer(self.static, self.renderer.text)
         self.painter.paint_static(static, self.view, size)
-        paint_hud_static(static, self.scene, size[0])
+        paint_hud_static(static, self.scene, size[0], keys=self.keys)
         self._clean = self.static.copy()
         self._trail = None
         self.invalidate()
@@ -144,7 +147,8 @@ class OffscreenRenderer:
             if len(r.dirty) > 1:  # thousands of particles: one rectangle to restore
                 r.dirty[:] = [r.dirty[0].unionall(r.dirty[1:])]
         self.painter.paint_dynamic(r, self.view, snap)
-        paint_hud(r, snap, surface.get_width())
+        paint_blocked(r, self.view, snap)
+        paint_hud(r, snap, surface.get_width(), keys=self.keys)
         if show_help:
             paint_help(r, surface.get_size(), keys)
         self._drawn = merge_rects(r.dirty)

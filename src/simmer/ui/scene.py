@@ -210,6 +210,26 @@ class ScenePainter:
         for row in range(1, maze.rows + 1):
             x, y = view.point(0, row * maze.cell)
             r.draw_text(f"{row * maze.cell:g}", (x - border, y - size), RULER_COLOR, size)
+        self._paint_axes(r, view, size)
+
+    def _paint_axes(self, r: Renderer, view: View, size: int) -> None:
+        """The axes mark at the origin, in the rulers' margins: +x to the right along the top,
+        +y down the left side (y grows downward on screen), each an arrow and its letter,
+        within the first cell so that no ruler label is covered."""
+        x0, y0 = view.point(0, 0)
+        reach = min(view.ppi * self.maze.cell * 0.55, 110)
+        top = y0 - size / 2
+        start = x0 + size * 2.2  # after "0 in"
+        end = start + reach * 0.6
+        r.draw_segment((start, top), (end, top), RULER_COLOR, 2)
+        r.draw_polygon([(end + 6, top), (end, top - 4), (end, top + 4)], RULER_COLOR)
+        r.draw_text("x", (end + 9, y0 - size - 1), RULER_COLOR, size)
+        left = x0 - (view.ox - 2) / 2
+        first = y0 + size * 0.2
+        r.draw_text("y", (left - size * 0.2, first), RULER_COLOR, size)
+        down = first + size + reach * 0.6
+        r.draw_segment((left, first + size), (left, down), RULER_COLOR, 2)
+        r.draw_polygon([(left, down + 6), (left - 4, down), (left + 4, down)], RULER_COLOR)
 
     def paint_trail(self, r: Renderer, view: View, points: FloatArray) -> None:
         """The trail's ``points`` (world inches; a NaN row splits it) as lines, each piece of

@@ -284,6 +284,8 @@ class VideoRecorder:
     ``fps``: frames per simulated second. ``size``: the frame size (default: the window's),
     rounded down to even numbers. ``controls``: what the HUD shows of the loop around the
     simulation (the :class:`~simmer.runner.Runner`: speed, pause, clients); default: none.
+    ``window`` False: the run has no window, so the frames show no key caps and no speed
+    (a headless run's "speed max" and keys nobody could press said nothing true of the video).
     Create it, and :meth:`close` it, in the thread that owns ``sim``; the first frame is the
     simulation as it is now. :meth:`close` finishes the file (also after Ctrl-C) and raises
     whatever stopped the writer, if anything did.
@@ -297,6 +299,7 @@ class VideoRecorder:
         fps: int = FPS,
         size: tuple[int, int] | None = None,
         controls: Controls | None = None,
+        window: bool = True,
     ) -> None:
         self.path = check_video_path(path, fps)
         self.fps = fps
@@ -304,7 +307,7 @@ class VideoRecorder:
         scene = StaticScene.of(sim)
         self.size = even_size(size or default_window_size(scene))
         self.controls: Controls = controls if controls is not None else LocalControls(sim)
-        self.canvas = OffscreenRenderer(scene, pygame.Surface(self.size, 0, 32))
+        self.canvas = OffscreenRenderer(scene, pygame.Surface(self.size, 0, 32), keys=window)
         self.writer = open_writer(self.path, self.size, fps, scene)
         self.maker = SnapshotMaker(sim)
         self.clock = FrameClock(fps, sim.time)

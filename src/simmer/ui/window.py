@@ -367,7 +367,7 @@ def run_window(
     screen), the log says so instead: one message, the true one.
     Raises :class:`~simmer.errors.SimmerError` if no window can be opened (no display).
     """
-    bridge = Bridge(runner.sim)
+    bridge = Bridge(runner.sim, echo=echo)
     try:
         window = Window(bridge)
     except pygame.error as exc:

@@ -147,6 +147,9 @@ class Snapshot:
     """The project's target zone (drawn in yellow), if the run has one."""
     belief: Belief | None = None
     """What the control program showed last of its belief (``robot.show``), if anything."""
+    blocked: str | None = None
+    """The drive command a wall or the block is stopping now, or stopped just before, in
+    words (:meth:`Simulation.blocked_now <simmer.world.simulation.Simulation.blocked_now>`)."""
 
     @property
     def outline(self) -> FloatArray:
@@ -196,4 +199,5 @@ class Snapshot:
             trail=trail,
             target=sim.scenario.target,
             belief=belief,
+            blocked=sim.blocked_now(),
         )

@@ -58,6 +58,32 @@ class CollisionEndEvent:
 
 
 @dataclass(frozen=True)
+class BlockedMoveEvent:
+    """A drive command ended (done, stopped by ``xx``) after some of its steps moved nothing: a
+    wall or the block was in the way. ``command`` is its text, ``started`` when it was
+    accepted, ``blocked_steps`` its steps that moved nothing, and it got ``done`` of ``amount``
+    (``unit``: in, or deg for a turning drive). Not an input: its reply stays the original's
+    (+inf, accepted), and the run's outcome, the HUD and the log say it."""
+
+    time: float
+    command: str
+    started: float
+    blocked_steps: int
+    done: float
+    amount: float
+    unit: str
+    step: int = 0
+
+    def describe(self) -> str:
+        """One line: the command, when, and how far it got."""
+        share = self.done / self.amount if self.amount else 0.0
+        return (
+            f"'{self.command}' at {self.started:.2f} s was blocked for {self.blocked_steps} "
+            f"steps: it got {self.done:.2f} of {self.amount:.2f} {self.unit} ({share:.0%})"
+        )
+
+
+@dataclass(frozen=True)
 class ResetEvent:
     """The simulation went back to its start."""
 
@@ -138,6 +164,7 @@ Event = (
     | StepEvent
     | CollisionEvent
     | CollisionEndEvent
+    | BlockedMoveEvent
     | ResetEvent
     | KeysEvent
     | PlaceEvent

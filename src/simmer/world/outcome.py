@@ -24,6 +24,7 @@ from simmer.config.zones import project_run
 from simmer.geometry import Pose, polygon_gap
 from simmer.protocol import parse_message
 from simmer.world.events import (
+    BlockedMoveEvent,
     CollisionEvent,
     CommandEvent,
     EstimateEvent,
@@ -79,6 +80,13 @@ class OutcomeReport:
     link: dict[str, float] | None = None
     """What the link model did (messages, bytes, seconds, lost, corrupted, dropouts; None
     when it is off): see :class:`simmer.transport.link.LinkCounts`."""
+    blocked_moves: int = 0
+    """Drive commands some of whose steps a wall or the block stopped (each replied +inf,
+    accepted, as in the original: only here, the HUD and the log say so)."""
+    first_blocked_move: str | None = None
+    """The first of them: the command, when it started, its blocked steps, how far it got."""
+    last_blocked_move: str | None = None
+    """The last of them, in the same words."""
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (for JSON and CSV)."""
@@ -125,12 +133,22 @@ class OutcomeReport:
                 *project,
                 f"  collisions {self.collisions}{first}, {self.blocked_steps} steps blocked; "
                 f"path {self.path_length:.1f} in",
+                *self._blocked_lines(),
                 f"  {self.messages} messages, {self.commands} commands, "
                 f"{self.busy_replies} busy (a drive still moving), {self.nan_replies} NaN "
                 f"replies; final pose x {x:.2f} in, y {y:.2f} in, heading {heading:.1f} deg",
                 *link,
             ]
         )
+
+    def _blocked_lines(self) -> list[str]:
+        """The blocked moves, if any: how many, the first and the last."""
+        if not self.blocked_moves:
+            return []
+        lines = [f"  blocked moves {self.blocked_moves}: first {self.first_blocked_move}"]
+        if self.blocked_moves > 1:
+            lines.append(f"    last {self.last_blocked_move}")
+        return lines
 
 
 MILESTONES = ("entered_loading", "picked_up", "left_loading", "delivered")
@@ -219,6 +237,9 @@ class Outcome:
         self.commands = 0
         self.nan_replies = 0
         self.busy_replies = 0
+        self.blocked_moves = 0
+        self.first_blocked_move: BlockedMoveEvent | None = None
+        self.last_blocked_move: BlockedMoveEvent | None = None
         self._blocked_before = self.sim.blocked_steps
         self._last_pose: Pose = self.sim.robot.pose
         self.milestones: dict[str, float] = {}
@@ -257,6 +278,10 @@ class Outcome:
             self.collisions += 1
             if self.first_collision is None:
                 self.first_collision = event.time
+        elif isinstance(event, BlockedMoveEvent):
+            self.blocked_moves += 1
+            self.first_blocked_move = self.first_blocked_move or event
+            self.last_blocked_move = event
         elif isinstance(event, EstimateEvent):
             self.localization.add(event.time, event.pose, event.truth)
         elif isinstance(event, PlaceEvent):
@@ -395,4 +420,12 @@ class Outcome:
             project=self.project_report(),
             localization=self.localization.report(),
             link=None if self.link_counts is None else self.link_counts(),
+            blocked_moves=self.blocked_moves,
+            first_blocked_move=_said(self.first_blocked_move),
+            last_blocked_move=_said(self.last_blocked_move),
         )
+
+
+def _said(event: BlockedMoveEvent | None) -> str | None:
+    """A blocked move in words (None: none)."""
+    return None if event is None else event.describe()

@@ -13,6 +13,7 @@ import logging
 import math
 import threading
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, NamedTuple
@@ -38,6 +39,7 @@ from simmer.geometry import (
 )
 from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message, printable
 from simmer.world.events import (
+    BlockedMoveEvent,
     CollisionEndEvent,
     CollisionEvent,
     CommandEvent,
@@ -60,6 +62,26 @@ MANUAL_TURN = 120.0  # deg/s
 MANUAL_KEYS = "wasdqe"
 STILL = Vec2(0.0, 0.0)
 """The robot's motion in a step in which it did not move."""
+
+MAX_BLOCKED_LOGGED = 20
+"""Blocked moves a run's log names one by one (each in a line of its own); past them it says
+once that the rest are counted only (the outcome and the HUD count every one): a wall follower
+turning against a wall for minutes would otherwise fill the log."""
+
+BLOCKED_SHOWN = 2.0
+"""Simulated seconds the window keeps showing a blocked move after it ended."""
+
+
+@dataclass
+class _Move:
+    """The drive command moving now: what it was, and how far it got (:class:`BlockedMoveEvent`)."""
+
+    command: str
+    started: float
+    amount: float
+    unit: str
+    done: float = 0.0
+    blocked: int = 0
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -151,6 +173,11 @@ class Simulation:
         self.steps = 0
         self.collisions = 0
         self.blocked_steps = 0
+        self.blocked_moves = 0
+        """Drive commands some of whose steps a wall or the block stopped."""
+        self.last_blocked: BlockedMoveEvent | None = None
+        """The last of them, for the HUD."""
+        self._moving: _Move | None = None
         self._was_blocked = False
         self.manual_keys: frozenset[str] = frozenset()
         self._lenient_warned: set[tuple[str, str]] = set()
@@ -250,6 +277,7 @@ class Simulation:
             return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
         if command.device == STOP_ID:
             self._robot.stop()
+            self._end_move()
             return Answer(math.inf)
         if command.device in self._switched_off:
             why = f"command '{printable(command.text)}': device {command.device} is switched off"
@@ -269,9 +297,11 @@ class Simulation:
             text = printable(command.text)
             why = f"command '{text}': device {command.device} raised and is switched off"
             return Answer.nan(logging.DEBUG, why)
-        if math.isnan(value) and command.device in self._robot.drives:
-            why = f"'{printable(command.text)}': a drive is still moving"
-            return Answer.nan(logging.DEBUG, why)
+        if command.device in self._robot.drives:
+            if math.isnan(value):
+                why = f"'{printable(command.text)}': a drive is still moving"
+                return Answer.nan(logging.DEBUG, why)
+            self._start_move(self._robot.drives[command.device], command.text)
         if abs(value) > self._widest and math.isfinite(value):
             why = (
                 f"command '{printable(command.text)}': device {command.device} read {value:g}, "
@@ -320,7 +350,7 @@ class Simulation:
     def _step_once(self) -> None:
         robot = self._robot
         dt = self._dt
-        dx = dy = rotation = 0.0
+        dx = dy = rotation = used = 0.0
         moved = False
         robot.turned = 0.0
         robot.moved = STILL
@@ -334,11 +364,20 @@ class Simulation:
                     dx += motion.dx
                     dy += motion.dy
                     rotation += motion.rotation
+                    used += abs(motion.step)
                     moved = True
+        moving = self._moving
         if moved:
-            self._move(dx, dy, rotation)
+            blocked = self._move(dx, dy, rotation)
+            if moving is not None:
+                if blocked:
+                    moving.blocked += 1
+                else:
+                    moving.done += used
         self._time = (self.steps + 1) * dt
         self.steps += 1
+        if moving is not None and not robot.any_drive_moving:
+            self._end_move()  # said at the step its motion ran out
         # A try costs nothing until it catches (Python >= 3.11), and switching a device off
         # builds new lists, so these loops go on over the old ones.
         for device in self._updating:
@@ -399,8 +438,63 @@ class Simulation:
                 self._switch_off(device, "shapes()", exc)
         return shapes
 
-    def _move(self, dx: float, dy: float, rotation: float) -> None:
-        """Apply a robot-frame motion unless it would touch a wall or the block."""
+    def _start_move(self, drive: Drive, text: str) -> None:
+        """A drive command was accepted: follow how far it gets (a zero move is none)."""
+        self._end_move()
+        if drive.remaining != 0.0:
+            unit = "deg" if drive.rotational else "in"
+            self._moving = _Move(printable(text.strip()), self._time, abs(drive.remaining), unit)
+
+    def blocked_now(self, linger: float = BLOCKED_SHOWN) -> str | None:
+        """What the window shows of a blocked move: the drive command moving now if a wall or
+        the block has stopped any of its steps, else the last blocked move for ``linger``
+        simulated seconds after it ended; None otherwise."""
+        moving = self._moving
+        if moving is not None and moving.blocked:
+            return (
+                f"blocked: '{moving.command}' {moving.blocked} steps, "
+                f"got {moving.done:.1f} of {moving.amount:g} {moving.unit}"
+            )
+        last = self.last_blocked
+        if last is not None and self._time - last.time <= linger:
+            return (
+                f"blocked: '{last.command}' {last.blocked_steps} steps, "
+                f"got {last.done:.1f} of {last.amount:g} {last.unit}"
+            )
+        return None
+
+    def _end_move(self) -> None:
+        """The drive command moving now is done (or stopped): if a wall or the block stopped
+        any of its steps, count it, log it and emit a :class:`BlockedMoveEvent`."""
+        moving, self._moving = self._moving, None
+        if moving is None or not moving.blocked:
+            return
+        self.blocked_moves += 1
+        event = BlockedMoveEvent(
+            self._time,
+            moving.command,
+            moving.started,
+            moving.blocked,
+            moving.done,
+            moving.amount,
+            moving.unit,
+            self.steps,
+        )
+        self.last_blocked = event
+        if self.blocked_moves <= MAX_BLOCKED_LOGGED:
+            log.info("blocked move: %s", event.describe())
+        if self.blocked_moves == MAX_BLOCKED_LOGGED:
+            log.info(
+                "%d blocked moves: the rest are counted in the outcome, not logged "
+                "(MAX_BLOCKED_LOGGED)",
+                MAX_BLOCKED_LOGGED,
+            )
+        if self.observers:
+            self.emit(event)
+
+    def _move(self, dx: float, dy: float, rotation: float) -> bool:
+        """Apply a robot-frame motion unless it would touch a wall or the block (True: it
+        would, and nothing moved)."""
         robot = self._robot
         pose = robot.pose
         offset = rotate(dx, dy, pose.heading)
@@ -412,7 +506,7 @@ class Simulation:
                 self._was_blocked = True
                 if self.observers:
                     self.emit(CollisionEvent(self._time, pose, self.steps))
-            return
+            return True
         if self._was_blocked:
             self._was_blocked = False
             if self.observers:
@@ -423,6 +517,7 @@ class Simulation:
         block = self._block
         if block.held is not None:  # _blocked placed its outline at the target
             block.carry_to(block.carried_pose(target), self._carried)
+        return False
 
     def _blocked(self, target: Pose) -> bool:
         """True if the robot at ``target`` would touch a wall or the block, or the block it
