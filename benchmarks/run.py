@@ -20,6 +20,7 @@ SUITES = [
     "bench_sweep",
     "bench_localization",
     "bench_limits",
+    "bench_tap",
 ]
 
 

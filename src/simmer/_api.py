@@ -42,6 +42,7 @@ INTERNAL = (
     "simmer.runner",
     "simmer.scene",
     "simmer.serve",
+    "simmer.tap",
     "simmer.transport",
     "simmer.ui",
     "simmer.untrusted",

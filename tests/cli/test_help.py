@@ -38,6 +38,7 @@ COMMANDS = [
     "render",
     "sweep",
     "console",
+    "tap",
 ]
 
 

@@ -37,10 +37,12 @@ LAYERS = [
     {"localize", "transport"},
     {"clock"},
     {"runner", "record"},
+    {"tap"},
     {"view"},
     {"ui"},
     {"serve"},
     {"sweep", "newfolder"},
+    {"calibrate"},
     {"cli"},
     {"__main__"},
 ]
