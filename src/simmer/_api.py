@@ -24,6 +24,7 @@ PUBLIC = (
 INTERNAL = (
     "simmer.__main__",
     "simmer._api",
+    "simmer.calibrate",
     "simmer.cli",
     "simmer.clock",
     "simmer.colors",

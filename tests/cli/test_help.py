@@ -39,6 +39,8 @@ COMMANDS = [
     "sweep",
     "console",
     "tap",
+    "calibrate",
+    "compare",
 ]
 
 

@@ -42,6 +42,22 @@ def number_check(
     return check
 
 
+MAX_SEEDS = 10_000
+"""Most seeds ``simmer compare`` and ``simmer calibrate`` simulate (each re-simulates the whole
+run: 0.09 s of CPU for the calibration routine's)."""
+
+
+def seeds_check(value: int) -> int:
+    """``--seeds``: 1 to :data:`MAX_SEEDS`, else one plain line naming the limit."""
+    if not 1 <= value <= MAX_SEEDS:
+        raise typer.BadParameter(
+            f"{value} seeds; give 1 to {MAX_SEEDS:,} (MAX_SEEDS; SimMeR's limits are in "
+            "docs/limits.md)",
+            param_hint="--seeds",
+        )
+    return value
+
+
 ConfigArg = Annotated[
     Path | None,
     typer.Argument(

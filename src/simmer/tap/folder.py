@@ -24,15 +24,24 @@ import io
 import json
 import math
 import time
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 import simmer
 from simmer.config.models import SimConfig
+from simmer.errors import SimmerError
 from simmer.record.eventlog import EventLog
-from simmer.record.reader import EVENTS
-from simmer.record.runfolder import FORMAT, MANIFEST, REPORT_JSON, config_to_manifest
+from simmer.record.reader import EVENTS, read_events
+from simmer.record.runfolder import (
+    FORMAT,
+    MANIFEST,
+    REPORT_JSON,
+    config_from_manifest,
+    config_to_manifest,
+    read_manifest,
+)
 from simmer.record.safefile import check_target, write_text
 from simmer.tap.decode import Exchange
 from simmer.world.events import CommandEvent
@@ -140,3 +149,33 @@ class TapRecorder:
             "true_pose": False,
         }
         write_text(self.folder / REPORT_JSON, json.dumps(report, indent=2) + "\n")
+
+
+@dataclass(frozen=True)
+class TapRun:
+    """A tap's run folder read back: the configuration it decoded with, and its exchanges
+    in order (each a :class:`~simmer.world.events.CommandEvent`; ``time`` in wall seconds)."""
+
+    folder: Path
+    config: SimConfig
+    exchanges: list[CommandEvent]
+    manifest: dict[str, Any]
+
+
+def load_tap_run(folder: str | Path) -> TapRun:
+    """Read a tap's run folder (ValueError, one line naming the file, if it is not one: a
+    simulated run's folder, a newer layout, a manifest or events that are not SimMeR's)."""
+    folder = Path(folder)
+    data = read_manifest(folder)
+    where = folder / MANIFEST
+    if not is_tap_folder(data):
+        raise ValueError(
+            f"{where}: not a tap's run folder (simmer tap --record DIR writes one of the real "
+            "robot)"
+        )
+    try:
+        config = config_from_manifest(data["config"])
+    except (KeyError, TypeError, ValueError, AttributeError, SimmerError) as exc:
+        raise ValueError(f"{where}: not a tap's manifest: {exc}") from None
+    events = [e for e in read_events(folder / EVENTS) if isinstance(e, CommandEvent)]
+    return TapRun(folder, config, events, data)
