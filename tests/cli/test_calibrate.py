@@ -23,7 +23,10 @@ from helpers import REPO
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_calibrate_then_compare_with_the_fitted_fragment(tmp_path: Path) -> None:
-    team = team_config(load_config())
+    rover = REPO / "examples" / "lab1_rover.toml"
+    config = tmp_path / "robot.toml"  # the lab's rover with a gyroscope
+    config.write_text(rover.read_text() + "\n[sensors.g0]\ntype = 'gyroscope'\nerror = 0.02\n")
+    team = team_config(load_config(rover))
     robot = Simulation(with_overrides(team, hidden_settings(3, team)), seed=3)
     record_routine(robot, team, tmp_path / "run")
     result = CliRunner().invoke(
@@ -39,11 +42,6 @@ def test_calibrate_then_compare_with_the_fitted_fragment(tmp_path: Path) -> None
     report = (tmp_path / "fit" / "calibration.md").read_text()
     assert "| `drives.w0.bias.y` |" in report
     assert "![The readings against the fitted simulator's band](readings.png)" in report
-    config = tmp_path / "robot.toml"
-    config.write_text(
-        (REPO / "examples" / "simmer_default.toml").read_text()
-        + "\n[sensors.g0]\ntype = 'gyroscope'\nerror = 0.02\nbias = 0.0\n"
-    )
     compared = CliRunner().invoke(
         app,
         ["compare", str(tmp_path / "run"), "--config", str(config), "--fitted", str(fitted),
