@@ -23,7 +23,10 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── ScenarioError + ValueError  a scenario setting that cannot be met
     ├── RunFolderError + ValueError a run folder's events or trace cannot be read
     ├── FolderExists + ValueError   ``simmer new`` would write over files
-    └── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    ├── FlagError + ValueError      a command-line flag ``simmer run`` refuses
+    ├── TapError               ``simmer tap`` cannot open the robot's port or its folder
+    ├── RoutineError + ValueError   a robot the calibration routine cannot run on
+    └── CalibrationError + ValueError  a run folder that is not the routine's run
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -191,6 +194,21 @@ class RunFolderError(SimmerError, ValueError):
 
 class FolderExists(SimmerError, ValueError):
     """The destination holds files already: nothing is written over them."""
+
+
+class TapError(SimmerError):
+    """``simmer tap`` cannot start: the robot's port will not open, or the run folder cannot
+    be written (one line naming it)."""
+
+
+class RoutineError(SimmerError, ValueError):
+    """The configuration's robot cannot run the calibration routine (no ultrasonic sensor, no
+    drive that goes straight, no room ahead of its start), or the command was given too little
+    to write or fit it."""
+
+
+class CalibrationError(SimmerError, ValueError):
+    """A tap's run folder does not hold the calibration routine's run."""
 
 
 class FlagError(SimmerError, ValueError):

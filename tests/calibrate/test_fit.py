@@ -10,12 +10,13 @@ from pathlib import Path
 import pytest
 
 from routine_support import record_routine
-from simmer.calibrate.fit import CalibrationError, calibrate, fitted_overrides, fragment, segment
+from simmer.calibrate.fit import calibrate, fitted_overrides, fragment, segment
 from simmer.calibrate.groundtruth import hidden_settings, team_config
-from simmer.calibrate.routine import HOLDS, LEGS, TURNS, RoutineError, plan, routine_program
+from simmer.calibrate.routine import HOLDS, LEGS, TURNS, plan, routine_program
 from simmer.calibrate.stats import chi2_quantile, t_quantile
 from simmer.config import load_config
 from simmer.config.overrides import with_overrides
+from simmer.errors import CalibrationError, RoutineError
 from simmer.tap.folder import load_tap_run
 from simmer.world.simulation import Simulation
 

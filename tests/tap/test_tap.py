@@ -16,10 +16,11 @@ import pytest
 
 from link_support import serving
 from simmer.config import load_config
+from simmer.errors import TapError
 from simmer.record.reader import read_events
 from simmer.tap.decode import TapDecoder
 from simmer.tap.folder import is_tap_folder
-from simmer.tap.session import Tap, TapError
+from simmer.tap.session import Tap
 from simmer.world.events import CommandEvent
 
 pytestmark = pytest.mark.timeout(90)

@@ -33,6 +33,7 @@ import numpy as np
 from simmer.calibrate.routine import Plan, plan
 from simmer.calibrate.stats import LEVEL, mean_interval, variance_interval
 from simmer.config.models import SimConfig
+from simmer.errors import CalibrationError
 from simmer.protocol import parse_message
 from simmer.tap.folder import TapRun
 from simmer.world.events import CommandEvent
@@ -48,10 +49,6 @@ STRAIGHT = 0.25
 SAMPLES = 9
 """Poses along a leg at which the maze's readings are checked."""
 MIN_STOPS = 2
-
-
-class CalibrationError(ValueError):
-    """The run folder does not hold the routine's run (one plain line)."""
 
 
 @dataclass

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from simmer.config.models import SimConfig
+from simmer.errors import RoutineError
 
 if TYPE_CHECKING:
     from simmer.world.simulation import Simulation
@@ -39,10 +40,6 @@ MAX_LEG = 8.0
 """Longest straight drive, inches."""
 CLEARANCE = 3.0
 """Inches left between the robot's front and the wall ahead at the end of a leg."""
-
-
-class RoutineError(ValueError):
-    """The configuration has no robot the routine can calibrate (one plain line)."""
 
 
 @dataclass(frozen=True)

@@ -64,9 +64,9 @@ def calibrate(
     (docs/calibration.md)."""
     from simmer.calibrate.fit import calibrate as fit
     from simmer.calibrate.report import write_report
-    from simmer.calibrate.routine import RoutineError, plan, routine_program
+    from simmer.calibrate.routine import plan, routine_program
     from simmer.config import load_config
-    from simmer.errors import ConfigError
+    from simmer.errors import ConfigError, RoutineError
     from simmer.tap.folder import load_tap_run
 
     try:

@@ -72,8 +72,8 @@ def tap(
     import threading
 
     from simmer.config import load_config
-    from simmer.errors import ConfigError
-    from simmer.tap.session import Tap, TapError
+    from simmer.errors import ConfigError, TapError
+    from simmer.tap.session import Tap
 
     try:
         settings = load_config(config)

@@ -29,17 +29,13 @@ from pathlib import Path
 from typing import Protocol
 
 from simmer.config.models import SimConfig
-from simmer.errors import SimmerError
+from simmer.errors import TapError
 from simmer.tap.decode import SILENCE, Exchange, TapDecoder
 from simmer.tap.folder import TapRecorder
 
 CHUNK = 4096
 """Bytes read from one side at a time."""
 TCP_PREFIX = "tcp://"
-
-
-class TapError(SimmerError):
-    """The tap cannot start: the robot's port cannot be opened, the folder not written."""
 
 
 class _Port(Protocol):
