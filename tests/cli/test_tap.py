@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from simmer.cli import app
@@ -43,3 +44,21 @@ def test_a_configuration_mistake_names_its_line(tmp_path: Path) -> None:
     assert result.exit_code == 1
     assert f"{config}:1: protocol" in result.output
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize(("command", "doing"), [("plot", "draw"), ("replay", "replay")])
+def test_plot_and_replay_point_a_taps_folder_to_compare(
+    tmp_path: Path, command: str, doing: str
+) -> None:
+    from simmer.config import load_config
+    from simmer.tap.folder import TapRecorder
+
+    recorder = TapRecorder(tmp_path / "real", load_config(), "/dev/rfcomm0")
+    recorder.close(
+        "x", False, bytes_sent=0, bytes_received=0, stray=0, program=None, program_status=None
+    )
+    result = CliRunner().invoke(app, [command, str(tmp_path / "real")])
+    assert result.exit_code == 1
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1
+    assert f"no true pose to {doing}; simmer compare {tmp_path / 'real'}" in lines[0]

@@ -100,3 +100,26 @@ def simulation(config: Path | None) -> Simulation:
     except ConfigError as exc:
         report_config_error(exc)
         raise typer.Exit(1) from None
+
+
+def refuse_tap_folder(folder: Path, doing: str) -> None:
+    """One plain line and exit status 1 if ``folder`` is a tap's run of the real robot, which
+    has no true pose to ``doing`` (``simmer compare`` draws its readings instead)."""
+    import json
+
+    from simmer.tap.folder import is_tap_folder
+
+    try:
+        with (folder / "manifest.json").open(encoding="utf-8") as file:
+            head = json.loads(file.read(1_000_000))
+    except (OSError, ValueError):
+        return  # not readable here: the command's own reading says why
+    if isinstance(head, dict) and is_tap_folder(head):
+        err.print(
+            f"{folder} is a tap's run of the real robot: it has no true pose to {doing}; "
+            f"simmer compare {folder} --config CONFIG draws its readings against the "
+            "simulator's (docs/calibration.md)",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)

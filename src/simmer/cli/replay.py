@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import MAX_SIMULATED_SECONDS, RunFolder, number_check
+from simmer.cli.common import MAX_SIMULATED_SECONDS, RunFolder, number_check, refuse_tap_folder
 
 if TYPE_CHECKING:
     from simmer.view.replay_model import Recording
@@ -97,6 +97,7 @@ def replay(
     beside the maze (H lists the keys). It is simulated again from the recorded configuration,
     seed and inputs, and says whether that matches the recording (and where it first differs
     if not)."""
+    refuse_tap_folder(folder, "replay")
     recording = load_recording(folder, trust, plugin, max_seconds)
     if check:
         raise typer.Exit(0 if recording.check.matches else 1)
