@@ -18,7 +18,7 @@ from simmer.config import load_config
 @pytest.mark.timeout(900)
 def test_one_hidden_robot_behind_the_tap_is_recovered(tmp_path: Path) -> None:
     logging.getLogger("simmer").setLevel(logging.ERROR)  # the robot's busy polls
-    result = trial(11, tmp_path / "trial", load_config(), seeds=30)
+    result = trial(11, tmp_path / "trial", load_config(), seeds=100)  # fewer: a thin 99% band
     missed = [key for key, covered in result.covered.items() if not covered]
     assert len(missed) <= 1, missed
     assert result.inside >= 0.95
