@@ -26,6 +26,7 @@ SUITES = [
     "bench_batch",
     "bench_sensors",
     "bench_grade",
+    "bench_tap",
 ]
 
 

@@ -26,6 +26,7 @@ PUBLIC = (
 INTERNAL = (
     "simmer.__main__",
     "simmer._api",
+    "simmer.calibrate",
     "simmer.cli",
     "simmer.clock",
     "simmer.colors",
@@ -45,6 +46,7 @@ INTERNAL = (
     "simmer.runner",
     "simmer.scene",
     "simmer.serve",
+    "simmer.tap",
     "simmer.transport",
     "simmer.ui",
     "simmer.untrusted",

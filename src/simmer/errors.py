@@ -26,7 +26,10 @@ meaning (a limit is an ``Exception`` a policy may see; Ctrl-C a ``KeyboardInterr
     ├── GenerateError + ValueError  no generated maze met the asked ranges
     ├── FlagError + ValueError      a command-line flag ``simmer run`` refuses
     ├── BatchError + ValueError     a batch or an environment given what it cannot take
-    └── PortsError + ValueError     ``--ports`` or ``SIMMER_PORTS`` names no three ports
+    ├── PortsError + ValueError     ``--ports`` or ``SIMMER_PORTS`` names no three ports
+    ├── TapError               ``simmer tap`` cannot open the robot's port or its folder
+    ├── RoutineError + ValueError   a robot the calibration routine cannot run on
+    └── CalibrationError + ValueError  a run folder that is not the routine's run
 
     LimitReached (Exception)       a policy ran into its run's limit
     └── WallLimitReached           the wall-clock limit, raised in the policy's thread
@@ -211,6 +214,21 @@ class GenerateError(SimmerError, ValueError):
 class PortsError(SimmerError, ValueError):
     """A ``--ports`` flag or ``SIMMER_PORTS`` value that names no three ports; its message is
     the one line to print (what was given, where, and what to write instead)."""
+
+
+class TapError(SimmerError):
+    """``simmer tap`` cannot start: the robot's port will not open, or the run folder cannot
+    be written (one line naming it)."""
+
+
+class RoutineError(SimmerError, ValueError):
+    """The configuration's robot cannot run the calibration routine (no ultrasonic sensor, no
+    drive that goes straight, no room ahead of its start), or the command was given too little
+    to write or fit it."""
+
+
+class CalibrationError(SimmerError, ValueError):
+    """A tap's run folder does not hold the calibration routine's run."""
 
 
 class FlagError(SimmerError, ValueError):

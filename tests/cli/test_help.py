@@ -39,6 +39,9 @@ COMMANDS = [
     "sweep",
     "grade",
     "console",
+    "tap",
+    "calibrate",
+    "compare",
     "maze",
 ]
 

@@ -37,11 +37,12 @@ LAYERS = [
     {"localize", "transport", "batch"},
     {"clock"},
     {"runner", "record"},
+    {"tap"},
     {"view"},
     {"ui"},
     {"serve"},
     {"sweep", "newfolder", "gym"},
-    {"grade"},
+    {"grade", "calibrate"},
     {"cli"},
     {"__main__"},
 ]

@@ -50,7 +50,7 @@ def test_the_cli_is_a_module_per_command() -> None:
     for info in app.registered_commands:
         name = info.name or getattr(info.callback, "__name__", "")
         modules[name] = getattr(info.callback, "__module__", "")
-    assert len(modules) == 13
+    assert len(modules) == 16
     assert modules == {name: f"simmer.cli.{name.replace('-', '_')}" for name in modules}
 
 

@@ -17,6 +17,7 @@ from simmer.cli.app import AS_COMMAND, app
 # isort: off
 from simmer.cli import new, check, keys, run, convert, export_map, table  # noqa: F401
 from simmer.cli import plot, replay, render, sweep, grade, console, maze  # noqa: F401
+from simmer.cli import tap, calibrate, compare  # noqa: F401
 
 # isort: on
 

@@ -42,6 +42,22 @@ def number_check(
     return check
 
 
+MAX_SEEDS = 10_000
+"""Most seeds ``simmer compare`` and ``simmer calibrate`` simulate (each re-simulates the whole
+run: 0.09 s of CPU for the calibration routine's)."""
+
+
+def seeds_check(value: int) -> int:
+    """``--seeds``: 1 to :data:`MAX_SEEDS`, else one plain line naming the limit."""
+    if not 1 <= value <= MAX_SEEDS:
+        raise typer.BadParameter(
+            f"{value} seeds; give 1 to {MAX_SEEDS:,} (MAX_SEEDS; SimMeR's limits are in "
+            "docs/limits.md)",
+            param_hint="--seeds",
+        )
+    return value
+
+
 ConfigArg = Annotated[
     Path | None,
     typer.Argument(
@@ -84,3 +100,26 @@ def simulation(config: Path | None) -> Simulation:
     except ConfigError as exc:
         report_config_error(exc)
         raise typer.Exit(1) from None
+
+
+def refuse_tap_folder(folder: Path, doing: str) -> None:
+    """One plain line and exit status 1 if ``folder`` is a tap's run of the real robot, which
+    has no true pose to ``doing`` (``simmer compare`` draws its readings instead)."""
+    import json
+
+    from simmer.tap.folder import is_tap_folder
+
+    try:
+        with (folder / "manifest.json").open(encoding="utf-8") as file:
+            head = json.loads(file.read(1_000_000))
+    except (OSError, ValueError):
+        return  # not readable here: the command's own reading says why
+    if isinstance(head, dict) and is_tap_folder(head):
+        err.print(
+            f"{folder} is a tap's run of the real robot: it has no true pose to {doing}; "
+            f"simmer compare {folder} --config CONFIG draws its readings against the "
+            "simulator's (docs/calibration.md)",
+            style="bold red",
+            markup=False,
+        )
+        raise typer.Exit(1)

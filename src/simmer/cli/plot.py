@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import RunFolder
+from simmer.cli.common import RunFolder, refuse_tap_folder
 
 
 @app.command(
@@ -20,6 +20,7 @@ def plot(folder: RunFolder) -> None:
     from simmer.errors import PlotError
     from simmer.record.plots import plot_run
 
+    refuse_tap_folder(folder, "draw")
     try:
         written = plot_run(folder, say=lambda line: out.print(line, markup=False))
     except PlotError as exc:

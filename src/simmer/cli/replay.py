@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from simmer.cli.app import Command, app, err, example, out
-from simmer.cli.common import MAX_SIMULATED_SECONDS, number_check
+from simmer.cli.common import MAX_SIMULATED_SECONDS, number_check, refuse_tap_folder
 
 if TYPE_CHECKING:
     from simmer.view.compare import Comparison
@@ -135,6 +135,8 @@ def replay(
     legend, one timeline, a red cross on a robot once it has collided. With --check, every
     folder given is checked in turn (a TA's whole class at once): exit status 1 if any
     differs or cannot be replayed, and a last line counting them."""
+    for folder in folders:
+        refuse_tap_folder(folder, "replay")
     if check:
         raise typer.Exit(_check_all(folders, trust, plugin, max_seconds))
     if len(folders) > 1:

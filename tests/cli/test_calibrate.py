@@ -1,0 +1,79 @@
+"""``simmer calibrate`` and ``simmer compare`` on the command line: the routine written, a
+run fitted into fitted.toml, its report and plots, the comparison with the fitted fragment;
+a folder that is not a tap's is one plain line."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from routine_support import record_routine
+from simmer.calibrate.groundtruth import hidden_settings, team_config
+from simmer.cli import app
+from simmer.config import load_config
+from simmer.config.overrides import with_overrides
+from simmer.world.simulation import Simulation
+
+from helpers import REPO
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_calibrate_then_compare_with_the_fitted_fragment(tmp_path: Path) -> None:
+    rover = REPO / "examples" / "lab1_rover.toml"
+    config = tmp_path / "robot.toml"  # the lab's rover with a gyroscope
+    config.write_text(rover.read_text() + "\n[sensors.g0]\ntype = 'gyroscope'\nerror = 0.02\n")
+    team = team_config(load_config(rover))
+    robot = Simulation(with_overrides(team, hidden_settings(3, team)), seed=3)
+    record_routine(robot, team, tmp_path / "run")
+    result = CliRunner().invoke(
+        app, ["calibrate", str(tmp_path / "run"), "--out", str(tmp_path / "fit"), "--seeds", "10"]
+    )
+    assert result.exit_code == 0, result.output
+    fitted = tmp_path / "fit" / "fitted.toml"
+    data = tomllib.loads(fitted.read_text())
+    assert set(data["drives"]) == {"w0", "r0"}
+    assert set(data["sensors"]) == {"u0", "u1", "u2", "u3", "g0"}
+    for name in ("readings.png", "drives.png"):
+        assert (tmp_path / "fit" / name).read_bytes()[:4] == b"\x89PNG"
+    report = (tmp_path / "fit" / "calibration.md").read_text()
+    assert "| `drives.w0.bias.y` |" in report
+    assert "![The readings against the fitted simulator's band](readings.png)" in report
+    compared = CliRunner().invoke(
+        app,
+        ["compare", str(tmp_path / "run"), "--config", str(config), "--fitted", str(fitted),
+         "--seeds", "10"],
+    )  # fmt: skip
+    assert compared.exit_code == 0, compared.output
+    assert "real readings" in compared.output
+    assert (tmp_path / "run" / "compare.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_the_routine_is_written_for_the_configuration(tmp_path: Path) -> None:
+    target = tmp_path / "routine.py"
+    result = CliRunner().invoke(
+        app,
+        ["calibrate", "--config", str(REPO / "examples" / "lab1_rover.toml"), "--routine",
+         str(target)],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    text = target.read_text()
+    compile(text, str(target), "exec")
+    assert "READ = 'u0,u1,u2,u3'" in text
+
+
+@pytest.mark.parametrize("command", ["calibrate", "compare"])
+def test_a_folder_that_is_not_a_taps_is_one_line(tmp_path: Path, command: str) -> None:
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "manifest.json").write_text('{"format": 1, "seed": 3}')
+    args = [command, str(tmp_path / "run")]
+    if command == "compare":
+        args += ["--config", str(REPO / "examples" / "simmer_default.toml")]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1
+    assert "not a tap's run folder" in lines[0]
