@@ -105,16 +105,14 @@ def simulation(config: Path | None) -> Simulation:
 def refuse_tap_folder(folder: Path, doing: str) -> None:
     """One plain line and exit status 1 if ``folder`` is a tap's run of the real robot, which
     has no true pose to ``doing`` (``simmer compare`` draws its readings instead)."""
-    import json
-
+    from simmer.record.runfolder import MANIFEST, read_json
     from simmer.tap.folder import is_tap_folder
 
     try:
-        with (folder / "manifest.json").open(encoding="utf-8") as file:
-            head = json.loads(file.read(1_000_000))
+        head = read_json(folder / MANIFEST)  # bounded: the folder is untrusted data
     except (OSError, ValueError):
         return  # not readable here: the command's own reading says why
-    if isinstance(head, dict) and is_tap_folder(head):
+    if is_tap_folder(head):
         err.print(
             f"{folder} is a tap's run of the real robot: it has no true pose to {doing}; "
             f"simmer compare {folder} --config CONFIG draws its readings against the "

@@ -26,6 +26,7 @@ import numpy as np
 
 from simmer import Simulation
 from simmer.client import Client, connect
+from simmer.config import with_overrides
 
 HEADINGS = (0.0, 90.0, 180.0, 270.0)
 """Degrees from +y: facing +y, -x, -y, +x."""
@@ -125,6 +126,8 @@ def localize(
     """Drive and filter for ``moves`` moves with ``sensors`` (default: every ultrasonic one;
     the first must face forward); the final best guess (x, y, heading, p)."""
     maze = robot.maze()
+    if maze.get("maze") != _named_maze(sim):  # the simulator runs another maze (a sweep's)
+        sim = Simulation(with_overrides(sim.config, {"maze": maze["maze"]}))
     if not sensors:
         sensors = [d["id"] for d in maze["devices"] if d["kind"] == "ultrasonic"]
     front = sensors[0]
@@ -145,6 +148,12 @@ def localize(
             robot.wait_idle("r0")
             f.turn_left()
     return f.best()
+
+
+def _named_maze(sim: Simulation) -> object:
+    """The maze ``sim``'s configuration names, as ``robot.maze()`` reports it."""
+    named = sim.config.settings.maze
+    return named if named is None or isinstance(named, str) else named.model_dump(mode="json")
 
 
 def main(argv: list[str] | None = None) -> None:
