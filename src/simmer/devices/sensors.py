@@ -96,6 +96,8 @@ class Ultrasonic(Device):
         self._last_x = self._last_y = 0.0
         self.last_heading = 0.0
         self.reading = math.nan
+        # the mounting height if set (None: the block's size, read at each read)
+        self._height = params.height if params.height is not None else self.mount_height
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
@@ -106,7 +108,7 @@ class Ultrasonic(Device):
     def sees_block(self, world: World, x: float, y: float) -> bool:
         """Block visibility: ``atan(h / d) <= beamwidth / 2`` (BEHAVIOUR §5.3)."""
         block = world.block
-        h = self.height(world) - block.size
+        h = (block.size if self._height is None else self._height) - block.size
         d = math.hypot(block.x - x, block.y - y)
         return math.degrees(math.atan2(h, d)) <= self.settings.beamwidth / 2.0
 
@@ -143,7 +145,10 @@ class Ultrasonic(Device):
         if distance == math.inf:
             reading = s.max_range
         else:
-            reading = min(max(self.percent_error(distance, s.error), s.min_range), s.max_range)
+            error = s.error
+            if error != 0.0 and distance != 0.0:  # percent_error written out
+                distance += self.gauss() * error * distance
+            reading = min(max(distance, s.min_range), s.max_range)
         self.last_time = world.time
         self._last_x, self._last_y = x, y
         self.last_heading = heading
