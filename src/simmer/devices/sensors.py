@@ -108,7 +108,7 @@ class Ultrasonic(Device):
     def sees_block(self, world: World, x: float, y: float) -> bool:
         """Block visibility: ``atan(h / d) <= beamwidth / 2`` (BEHAVIOUR §5.3)."""
         block = world.block
-        h = (block.size if self._height is None else self._height) - block.size
+        h = self.height(world) - block.size
         d = math.hypot(block.x - x, block.y - y)
         return math.degrees(math.atan2(h, d)) <= self.settings.beamwidth / 2.0
 
@@ -126,7 +126,7 @@ class Ultrasonic(Device):
         y = ry + px * sn + py * c
         heading = rheading + self.rotation
         maze, block = world.maze, world.block
-        h = self.height(world) - block.size
+        h = (block.size if self._height is None else self._height) - block.size
         d = math.hypot(block.x - x, block.y - y)
         distance = cast_fan(
             maze.hwall,
