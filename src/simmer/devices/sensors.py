@@ -203,7 +203,9 @@ class Gyroscope(Device):
     def update(self, world: World) -> None:
         """Add this step's true heading change plus drift, with percent error."""
         change = world.robot.turned + self.settings.bias * world.dt
-        change = self.percent_error(change, self.settings.error)
+        error = self.settings.error
+        if error != 0.0 and change != 0.0:  # percent_error written out (once a step)
+            change += self.gauss() * error * change
         self.angle = wrap_degrees(self.angle + change)
 
     def simulate(self, value: float, world: World) -> float:

@@ -34,7 +34,6 @@ from simmer.geometry import (
     place_polygon,
     polygon_hits_grid,
     robot_blocked,
-    rotate,
     wrap_degrees,
 )
 from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_commands, printable
@@ -230,7 +229,7 @@ class Simulation:
         an unknown device answers NaN and logs why. ``client`` names the sender in the event
         stream. (A transport parses a message once, as it decodes it, and calls
         :meth:`answer`, which returns why with each value.)"""
-        commands = self.parse(message)
+        commands = parse_commands(message, lenient=self._lenient)
         self._before(commands)
         values: list[float] = []
         failed: list[Answer] = []
@@ -520,8 +519,13 @@ class Simulation:
         would, and nothing moved)."""
         robot = self._robot
         pose = robot.pose
-        offset = rotate(dx, dy, pose.heading)
-        target = Pose(pose.x + offset.x, pose.y + offset.y, wrap_degrees(pose.heading + rotation))
+        rad = math.radians(pose.heading)  # geometry.rotate written out: no Vec2 built
+        c, s = math.cos(rad), math.sin(rad)
+        target = Pose(
+            pose.x + (dx * c - dy * s),
+            pose.y + (dx * s + dy * c),
+            wrap_degrees(pose.heading + rotation),
+        )
         if self._blocked(target):
             self.blocked_steps += 1
             if not self._was_blocked:
