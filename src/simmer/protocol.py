@@ -26,6 +26,7 @@ protocol's frames) and SimMeR v1.2's framed text (``[u0]`` -> ``[u0:15.45]``, BE
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import struct
@@ -148,7 +149,27 @@ def printable(text: str) -> str:
 
 def parse_message(text: str, *, lenient: bool = False) -> list[Command]:
     """Split a message on commas and parse each command; an empty message is one bad command."""
-    return [parse_command(part, lenient=lenient) for part in text.strip().split(",")]
+    return list(parse_commands(text, lenient=lenient))
+
+
+CACHED_MESSAGE_CHARS = 256
+"""Messages up to this long are parsed once and remembered (:func:`parse_commands`)."""
+
+
+def parse_commands(text: str, *, lenient: bool = False) -> tuple[Command, ...]:
+    """:func:`parse_message` as a tuple, remembered for the last 1,024 short messages: a
+    program sends the same few messages (``u0,u1,u2,u3``) thousands of times, and a
+    :class:`Command` is immutable, so the loop need not parse (or build) them again."""
+    if len(text) <= CACHED_MESSAGE_CHARS:
+        return _parse_cached(text, lenient)
+    return _parse_uncached(text, lenient)
+
+
+def _parse_uncached(text: str, lenient: bool) -> tuple[Command, ...]:
+    return tuple(parse_command(part, lenient=lenient) for part in text.strip().split(","))
+
+
+_parse_cached = functools.lru_cache(maxsize=1024)(_parse_uncached)
 
 
 def command_ids(text: str) -> list[str]:
@@ -296,7 +317,7 @@ def decode_message(
     text = text.rstrip("\r\n")
     if clock:
         return ClockText(text, size)
-    return CommandText(text, count, tuple(parse_message(text, lenient=lenient)), size)
+    return CommandText(text, count, parse_commands(text, lenient=lenient), size)
 
 
 def pack_replies(values: Sequence[float], width: int = 4) -> bytes:
@@ -484,7 +505,7 @@ class FramedCodec:
         if error is not None:
             ids = tuple(command_ids(commands))
             return Refused(error, len(ids), ids)
-        parsed = tuple(parse_message(commands, lenient=self.lenient))
+        parsed = parse_commands(commands, lenient=self.lenient)
         return CommandText(commands, count, parsed, dropped=dropped)
 
     def encode(self, decoded: Decoded, values: Sequence[float]) -> bytes:

@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 
 from simmer import Simulation
+from simmer.devices.base import NOISE_BLOCK
+from simmer.devices.sensors import Ultrasonic
 
 from helpers import make_sim, noisy_data
 
@@ -50,3 +52,27 @@ def test_drawn_biases_come_from_their_own_streams() -> None:
     more = data | {"sensors": {**data["sensors"], "g0": {"type": "gyroscope"}}}
     assert make_sim(more, seed=11).robot.drives["w0"].bias == first
     assert make_sim(data, seed=12).robot.drives["w0"].bias != first
+
+
+def test_block_drawn_noise_is_the_scalar_draws_in_order() -> None:
+    """A built-in device draws its noise in blocks (issue 36): the values the scalar draws of
+    earlier versions gave, in their order, across block boundaries, so recorded runs replay."""
+    sim = make_sim(noisy_data(), seed=11)
+    u0 = sim.robot.devices["u0"]
+    count = 3 * NOISE_BLOCK + 5
+    drawn = [u0.gauss() for _ in range(count)]
+    stream = sim.stream("device:u0")
+    assert drawn == [float(stream.normal(0.0, 2.0)) for _ in range(count)]
+
+
+def test_a_subclass_of_a_built_in_kind_draws_one_value_at_a_time() -> None:
+    """A user's subclass may draw from ``rng`` itself: its stream is not read ahead."""
+
+    class Mine(Ultrasonic):
+        pass
+
+    sim = make_sim(noisy_data(), seed=11)
+    mine = Mine("m0", sim.robot.devices["u0"].params, sim.stream("device:m0"))
+    seen = [mine.gauss(), float(mine.rng.normal(0.0, 2.0)), mine.gauss()]
+    stream = sim.stream("device:m0")
+    assert seen == [float(stream.normal(0.0, 2.0)) for _ in range(3)]

@@ -30,6 +30,9 @@ from simmer.geometry import BoolArray, FloatArray, Pose, Vec2, rectangle
 
 Category = Literal["motor", "drive", "sensor"]
 
+NOISE_BLOCK = 64
+"""N(0, 2) values a built-in device draws from its stream at once (:meth:`Device.gauss`)."""
+
 
 def _not_bool(value: Any) -> Any:
     """Refuse true and false where a whole number belongs (pydantic reads them as 1 and 0)."""
@@ -232,11 +235,18 @@ class Device:
     """What its commands read, each a column of a run's trace named by the id and this suffix:
     one reading (``""``) for most kinds; an IMU's three axes (``"", "-1", "-2"``: ``i0``,
     ``i0-1``, ``i0-2``)."""
+    block_noise: ClassVar[bool] = False
+    """True on a kind whose stream gives nothing but :meth:`gauss` values: it draws them
+    :data:`NOISE_BLOCK` at a time. Only the class that says so itself (not a subclass, which
+    may draw from ``rng`` directly and so would see its stream's order change)."""
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         self.id = device_id
         self.params = params
         self.rng = rng
+        self._blocked = type(self).__dict__.get("block_noise", False) is True
+        self._gauss_block: list[float] = []
+        self._gauss_next = 0
         self.position = Vec2(params.position[0], params.position[1])
         self.rotation = float(params.rotation)
         self.visible = params.visible
@@ -283,4 +293,19 @@ class Device:
         """SimMeR's percent error: ``value + gauss(0, 2) · error · value`` (BEHAVIOUR §4)."""
         if error == 0.0 or value == 0.0:  # nothing to scale: no draw (a w0-0 poll draws none)
             return value
-        return value + float(self.rng.normal(0.0, 2.0)) * error * value
+        return value + self.gauss() * error * value
+
+    def gauss(self) -> float:
+        """The stream's next N(0, 2) value: what ``rng.normal(0, 2)`` gives, in the same order.
+
+        A kind with :attr:`block_noise` takes it from a block of :data:`NOISE_BLOCK` drawn at
+        once (NumPy's vector draw gives the scalar draws' values: a recorded run replays bit
+        for bit), which costs a list index instead of a NumPy call per sample."""
+        if not self._blocked:
+            return float(self.rng.normal(0.0, 2.0))
+        k = self._gauss_next
+        if k == len(self._gauss_block):
+            self._gauss_block = self.rng.normal(0.0, 2.0, NOISE_BLOCK).tolist()
+            k = 0
+        self._gauss_next = k + 1
+        return self._gauss_block[k]

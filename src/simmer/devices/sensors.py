@@ -84,6 +84,7 @@ class Ultrasonic(Device):
     """Shortest distance at which any ray of the cone meets a wall (or the block, if seen)."""
 
     Params = UltrasonicParams
+    block_noise: ClassVar[bool] = True
     default_outline: ClassVar[FloatArray] = rectangle(2.0, 1.0)
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
@@ -92,9 +93,11 @@ class Ultrasonic(Device):
         self.settings = params
         self.rays = np.full(params.num_rays, math.inf)
         self.last_time = -math.inf
-        self.last_origin = Vec2(0.0, 0.0)
+        self._last_x = self._last_y = 0.0
         self.last_heading = 0.0
         self.reading = math.nan
+        # the mounting height if set (None: the block's size, read at each read)
+        self._height = params.height if params.height is not None else self.mount_height
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
@@ -110,17 +113,28 @@ class Ultrasonic(Device):
         return math.degrees(math.atan2(h, d)) <= self.settings.beamwidth / 2.0
 
     def simulate(self, value: float, world: World) -> float:
-        """Measure the distance in inches, with noise, clamped to [min_range, max_range]."""
+        """Measure the distance in inches, with noise, clamped to [min_range, max_range].
+
+        The loop's dearest Python: :meth:`world_pose` and :meth:`sees_block` written out
+        (the same arithmetic, in the same order), nothing built but the reading."""
         s = self.settings
-        x, y, heading = self.world_pose(world.robot.pose)
-        maze = world.maze
+        rx, ry, rheading = world.robot.pose
+        px, py = self.position
+        rad = math.radians(rheading)
+        c, sn = math.cos(rad), math.sin(rad)
+        x = rx + px * c - py * sn
+        y = ry + px * sn + py * c
+        heading = rheading + self.rotation
+        maze, block = world.maze, world.block
+        h = (block.size if self._height is None else self._height) - block.size
+        d = math.hypot(block.x - x, block.y - y)
         distance = cast_fan(
             maze.hwall,
             maze.vwall,
             maze.cell,
             maze.segments,
-            world.block.segments,
-            self.sees_block(world, x, y),
+            block.segments,
+            math.degrees(math.atan2(h, d)) <= s.beamwidth / 2.0,
             x,
             y,
             heading,
@@ -131,12 +145,20 @@ class Ultrasonic(Device):
         if distance == math.inf:
             reading = s.max_range
         else:
-            reading = min(max(self.percent_error(distance, s.error), s.min_range), s.max_range)
+            error = s.error
+            if error != 0.0 and distance != 0.0:  # percent_error written out
+                distance += self.gauss() * error * distance
+            reading = min(max(distance, s.min_range), s.max_range)
         self.last_time = world.time
-        self.last_origin = Vec2(x, y)
+        self._last_x, self._last_y = x, y
         self.last_heading = heading
         self.reading = reading
         return reading
+
+    @property
+    def last_origin(self) -> Vec2:
+        """Where the sensor was at its last read (built when the window asks)."""
+        return Vec2(self._last_x, self._last_y)
 
     def shapes(self, world: World) -> list[Shape]:
         """The rays of the last read, while it is recent enough to show."""
@@ -170,6 +192,7 @@ class Gyroscope(Device):
     """Integrates the heading change each step, with drift and noise; wraps to [0, 360)."""
 
     Params = GyroscopeParams
+    block_noise: ClassVar[bool] = True
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         super().__init__(device_id, params, rng)
@@ -180,7 +203,9 @@ class Gyroscope(Device):
     def update(self, world: World) -> None:
         """Add this step's true heading change plus drift, with percent error."""
         change = world.robot.turned + self.settings.bias * world.dt
-        change = self.percent_error(change, self.settings.error)
+        error = self.settings.error
+        if error != 0.0 and change != 0.0:  # percent_error written out (once a step)
+            change += self.gauss() * error * change
         self.angle = wrap_degrees(self.angle + change)
 
     def simulate(self, value: float, world: World) -> float:
@@ -205,6 +230,7 @@ class Compass(Device):
     """The absolute heading (angle from +y) plus bias and noise, in [0, 360)."""
 
     Params = CompassParams
+    block_noise: ClassVar[bool] = True
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
         super().__init__(device_id, params, rng)
@@ -216,7 +242,7 @@ class Compass(Device):
         s = self.settings
         heading = world.robot.pose.heading + self.rotation + s.bias
         if s.error:
-            heading += float(self.rng.normal(0.0, 2.0)) * s.error * 360.0
+            heading += self.gauss() * s.error * 360.0
         return wrap_degrees(heading)
 
 
@@ -245,6 +271,7 @@ class Infrared(Device):
     """Reads 1 when at least ``threshold`` of the floor circle below it is white, else 0."""
 
     Params = InfraredParams
+    block_noise: ClassVar[bool] = True
     default_outline: ClassVar[FloatArray] = rectangle(0.6, 0.6)
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
@@ -258,17 +285,25 @@ class Infrared(Device):
             height = self.mount_height  # [x, y, height] given instead of `height`
         self.radius = height * trig(half_fov)
         self.last_time = -math.inf
-        self.last_center = Vec2(0.0, 0.0)
+        self._center_x = self._center_y = 0.0
         self.reading = math.nan
 
     def white_fraction(self, world: World) -> float:
         """Exact-to-1/256 fraction of the sensed floor circle that is white (no noise)."""
-        pose = self.world_pose(world.robot.pose)
+        rx, ry, rheading = world.robot.pose  # world_pose written out: no Pose built
+        px, py = self.position
+        rad = math.radians(rheading)
+        c, sn = math.cos(rad), math.sin(rad)
+        x = rx + px * c - py * sn
+        y = ry + px * sn + py * c
         maze = world.maze
-        self.last_center = Vec2(pose.x, pose.y)
-        return float(
-            white_fraction(maze.floor_white, maze.tile, pose.x, pose.y, self.radius, _DISK)
-        )
+        self._center_x, self._center_y = x, y
+        return float(white_fraction(maze.floor_white, maze.tile, x, y, self.radius, _DISK))
+
+    @property
+    def last_center(self) -> Vec2:
+        """The centre of the floor circle at the last read (built when the window asks)."""
+        return Vec2(self._center_x, self._center_y)
 
     def simulate(self, value: float, world: World) -> float:
         """1.0 (white) or 0.0 (black)."""

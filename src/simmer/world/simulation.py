@@ -34,10 +34,9 @@ from simmer.geometry import (
     place_polygon,
     polygon_hits_grid,
     robot_blocked,
-    rotate,
     wrap_degrees,
 )
-from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_message, printable
+from simmer.protocol import LENIENT_RULES, STOP_ID, Command, parse_commands, printable
 from simmer.world.events import (
     BlockedMoveEvent,
     CollisionEndEvent,
@@ -230,30 +229,47 @@ class Simulation:
         an unknown device answers NaN and logs why. ``client`` names the sender in the event
         stream. (A transport parses a message once, as it decodes it, and calls
         :meth:`answer`, which returns why with each value.)"""
-        answers = self.answer(self.parse(message), message, client)
-        for answer in answers:
+        commands = parse_commands(message, lenient=self._lenient)
+        self._before(commands)
+        values: list[float] = []
+        failed: list[Answer] = []
+        for command in commands:
+            reply = self._reply(command)
+            if type(reply) is float:
+                values.append(reply)
+            else:
+                assert isinstance(reply, Answer)
+                failed.append(reply)
+                values.append(reply.value)
+        if self.observers:
+            self.emit(CommandEvent(self._time, message, tuple(values), self.steps, client))
+        for answer in failed:
             if answer.why is not None:
                 log.log(answer.level, "%s", answer.why)
-        return [answer.value for answer in answers]
+        return values
 
     def parse(self, message: str) -> tuple[Command, ...]:
         """The commands of a message, read as this configuration says (strictly, or the
         original SimMeR's lenient way)."""
-        return tuple(parse_message(message, lenient=self._lenient))
+        return parse_commands(message, lenient=self._lenient)
 
     def answer(self, commands: Sequence[Command], message: str, client: str = "") -> list[Answer]:
         """Execute the parsed ``commands`` of ``message``: each one's value and, for a NaN,
         why (the caller logs as much of that as it wants and tells the client)."""
-        if self._owner is not None:
-            self._check_thread("command")
-        for command in commands:
-            if command.lenient:
-                self._warn_lenient(command)
+        self._before(commands)
         answers = [self.execute(command) for command in commands]
         if self.observers:
             replies = tuple(answer.value for answer in answers)
             self.emit(CommandEvent(self._time, message, replies, self.steps, client))
         return answers
+
+    def _before(self, commands: Sequence[Command]) -> None:
+        """What comes before a message's commands run: the thread check, lenient warnings."""
+        if self._owner is not None:
+            self._check_thread("command")
+        for command in commands:
+            if command.lenient:
+                self._warn_lenient(command)
 
     def _warn_lenient(self, command: Command) -> None:
         """Say once per device and rule that a command was read the originals' way."""
@@ -272,13 +288,19 @@ class Simulation:
 
     def execute(self, command: Command) -> Answer:
         """Execute one parsed command: its reply value and, for a NaN, why."""
+        reply = self._reply(command)
+        return reply if isinstance(reply, Answer) else Answer(reply)
+
+    def _reply(self, command: Command) -> float | Answer:
+        """Execute one parsed command: its value if it succeeded (no object built, as the
+        loop's hot path wants), else a NaN :class:`Answer` saying why."""
         if command.error is not None:
             text = printable(command.text)
             return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
         if command.device == STOP_ID:
             self._robot.stop()
             self._end_move()
-            return Answer(math.inf)
+            return math.inf
         if command.device in self._switched_off:
             why = f"command '{printable(command.text)}': device {command.device} is switched off"
             return Answer.nan(logging.DEBUG, why)
@@ -308,7 +330,7 @@ class Simulation:
                 f"beyond what a 4-byte reply holds (±{FLOAT32_MAX:.3g}); reply_bytes = 8 sends it"
             )
             return Answer.nan(logging.WARNING, why)
-        return Answer(value)
+        return value
 
     # ----------------------------------------------------------------- time
 
@@ -497,8 +519,13 @@ class Simulation:
         would, and nothing moved)."""
         robot = self._robot
         pose = robot.pose
-        offset = rotate(dx, dy, pose.heading)
-        target = Pose(pose.x + offset.x, pose.y + offset.y, wrap_degrees(pose.heading + rotation))
+        rad = math.radians(pose.heading)  # geometry.rotate written out: no Vec2 built
+        c, s = math.cos(rad), math.sin(rad)
+        target = Pose(
+            pose.x + (dx * c - dy * s),
+            pose.y + (dx * s + dy * c),
+            wrap_degrees(pose.heading + rotation),
+        )
         if self._blocked(target):
             self.blocked_steps += 1
             if not self._was_blocked:
