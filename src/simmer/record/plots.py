@@ -42,7 +42,7 @@ from pydantic import ValidationError
 
 from simmer.colors import START_COLOR as START_RGB
 from simmer.colors import TRAIL_COLOR, Color
-from simmer.config.maze import Block, Maze
+from simmer.config.maze import Maze
 from simmer.config.models import Settings
 from simmer.config.zones import Zones
 from simmer.errors import PlotError, RunFolderError, UnsafeOutput
@@ -57,6 +57,7 @@ from simmer.scene import (
     maze_items,
     placed_block,
     placed_robot,
+    put_down_block,
     robot_items,
 )
 from simmer.untrusted import drawable, read_at_most
@@ -829,10 +830,8 @@ def _draw_handled(ax: Axes, run: RecordedRun, handled: Handled) -> list[Any]:
     from matplotlib.patches import Polygon
 
     settings, scenario = run.settings, run.scenario
-    block = Block.from_settings(settings)
-    if scenario is not None:
-        block.place(*scenario.block, block.rotation)
-    lying = block.polygon.copy()
+    at = scenario.block if scenario is not None else None
+    lying = placed_block(settings, at)
     colour = rgb(settings.block_color)
     ax.add_patch(Polygon(lying, closed=True, fc=colour, ec="black", ls="--", alpha=0.35, zorder=3))
     handles = [_line(colour, "s", "block where it lay (faint)", mec="black")]
@@ -840,12 +839,10 @@ def _draw_handled(ax: Axes, run: RecordedRun, handled: Handled) -> list[Any]:
     ax.plot(px, py, "^", ms=13, mfc=PICKUP_COLOR, mec="white", mew=1.2, zorder=9)
     handles.append(_line(PICKUP_COLOR, "^", f"picked up ({handled.picked_up:.1f} s)", mec="white"))
     if handled.put_down is not None:
-        block.hold(Pose(px, py, ph))
-        put = block.carried_pose(Pose(*_pose_at(run.trace, handled.put_down)))
-        block.release()
-        block.place(*put)
-        draw_items(ax, block_items(block.polygon, settings, Look.PAGE))
-        x, y, _ = _pose_at(run.trace, handled.put_down)
+        put = _pose_at(run.trace, handled.put_down)
+        polygon = put_down_block(settings, at, (px, py, ph), put)
+        draw_items(ax, block_items(polygon, settings, Look.PAGE))
+        x, y, _ = put
         ax.plot(x, y, "v", ms=13, mfc=DELIVERY_COLOR, mec="white", mew=1.2, zorder=9)
         where = "delivered to" if handled.delivered else "put down in"
         said = f"{where} {handled.zone or 'a zone'} ({handled.put_down:.1f} s)"
