@@ -124,7 +124,8 @@ def localize(
     show: bool = True,
 ) -> tuple[float, ...]:
     """Drive and filter for ``moves`` moves with ``sensors`` (default: every ultrasonic one;
-    the first must face forward); the final best guess (x, y, heading, p)."""
+    the first must face forward), sensing before each move and after the last; the final best
+    guess (x, y, heading, p), made where the robot ends."""
     maze = robot.maze()
     if maze.get("maze") != _named_maze(sim):  # the simulator runs another maze (a sweep's)
         sim = Simulation(with_overrides(sim.config, {"maze": maze["maze"]}))
@@ -132,13 +133,15 @@ def localize(
         sensors = [d["id"] for d in maze["devices"] if d["kind"] == "ultrasonic"]
     front = sensors[0]
     f = HistogramFilter(maze, sim, sensors)
-    for _ in range(moves):
+    for move in range(moves + 1):
         readings = robot.send(",".join(sensors))
         f.sense(readings)
         if show:
             f.show(robot)  # its pose counts as the estimate
         else:
             robot.report_pose(*f.best()[:3])
+        if move == moves:  # the last estimate is made after the last move, where it ends
+            break
         if readings[sensors.index(front)] > f.cell:
             robot.drive("w0", f.cell)
             robot.wait_idle()

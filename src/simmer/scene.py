@@ -39,7 +39,7 @@ from simmer.colors import (
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import Settings
 from simmer.config.zones import Zone, Zones
-from simmer.geometry import FloatArray, place_polygon
+from simmer.geometry import FloatArray, Pose, place_polygon
 
 RGBA = np.ndarray[Any, np.dtype[np.uint8]]
 
@@ -260,6 +260,23 @@ def placed_block(settings: Settings, at: tuple[float, float] | None = None) -> F
     block = Block.from_settings(settings)
     if at is not None:
         block.place(*at, block.rotation)
+    return block.polygon
+
+
+def put_down_block(
+    settings: Settings,
+    at: tuple[float, float] | None,
+    picked: tuple[float, float, float],
+    put: tuple[float, float, float],
+) -> FloatArray:
+    """The block's outline where a gripper put it down: it lay at ``at`` (None: where the
+    settings put it), was taken with the robot at pose ``picked`` and kept its place relative
+    to the robot (as the simulation carries it) until the robot was at pose ``put``."""
+    block = Block.from_settings(settings)
+    if at is not None:
+        block.place(*at, block.rotation)
+    block.hold(Pose(*picked))
+    block.place(*block.carried_pose(Pose(*put)))
     return block.polygon
 
 

@@ -19,7 +19,7 @@ from link_support import run_program
 from simmer import Simulation
 from simmer.colors import DROPOFF_COLOR, LOADING_COLOR, TARGET_COLOR
 from simmer.errors import SweepError
-from simmer.record.plots import plot_run
+from simmer.record.plots import plot_run, read_run, write_path_plot
 from simmer.record.runfolder import load_run, retrace
 from simmer.sweep.spec import load_sweep, sweep_from_dict
 from simmer.sweep.success import success_condition
@@ -117,6 +117,27 @@ def test_a_recorded_project_run_replays_bit_for_bit(tmp_path: Path) -> None:
     assert (tmp_path / "again.csv").read_text() == (folder / "trace.csv").read_text()
     plot_run(folder)  # path.png with the zones, the drawn start and block
     assert (folder / "path.png").is_file()
+    # the block drawn where it was delivered (solid) and where it lay (faint), with marks
+    run = read_run(folder)
+    assert run.handled is not None
+    assert run.handled.delivered
+    assert run.handled.put_down == pytest.approx(report["outcome"]["delivered_at"])
+    pixels = write_path_plot(run, tmp_path / "path.png")
+    image = np.asarray(Image.open(tmp_path / "path.png").convert("RGB")).astype(int)
+    colour = np.array(run.settings.block_color[:3])
+
+    def solid(x: float, y: float) -> bool:
+        column, row = pixels.pixel(x, y)
+        patch = image[int(row) - 3 : int(row) + 4, int(column) - 3 : int(column) + 4]
+        return bool((np.abs(patch - colour).sum(axis=2) < 40).sum() > 30)
+
+    delivered = (sim.block.x, sim.block.y)  # where the simulation left it
+    assert delivered != tuple(manifest["scenario"]["block"])
+    assert solid(*delivered), "the block is not drawn where it was delivered"
+    assert not solid(*manifest["scenario"]["block"]), "the block is drawn solid where it lay"
+    for mark in ("#1a9850", "#6a3d9a"):  # the pickup and delivery marks
+        rgb = np.array([int(mark[i : i + 2], 16) for i in (1, 3, 5)])
+        assert (np.abs(image - rgb).sum(axis=2) < 30).sum() > 40, mark
     report_md = (folder / "report.md").read_text()
     assert "## Project" in report_md
     assert "| Delivered it |" in report_md

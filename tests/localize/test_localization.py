@@ -186,9 +186,9 @@ def test_showing_changes_no_reply_and_no_timing_under_lockstep(tmp_path: Path) -
     Simulation.from_config().expected([[6.0, 42.0, 0.0]])
     shown = example_run(tmp_path)
     hidden = example_run(tmp_path, "--no-show")
-    assert sum(isinstance(e, BeliefEvent) for e in shown) == 5
+    assert sum(isinstance(e, BeliefEvent) for e in shown) == 6
     assert not any(isinstance(e, BeliefEvent) for e in hidden)
-    assert sum(isinstance(e, EstimateEvent) for e in hidden) == 5  # report_pose instead
+    assert sum(isinstance(e, EstimateEvent) for e in hidden) == 6  # report_pose instead
     assert fingerprint(shown) == fingerprint(hidden)
 
 
@@ -198,8 +198,11 @@ def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
 
     folder = tmp_path / "run"
     example_run(tmp_path, record=folder)
-    recorded = [e for e in read_events(folder / "events.jsonl") if isinstance(e, BeliefEvent)]
-    assert len(recorded) == 5
+    events = read_events(folder / "events.jsonl")
+    recorded = [e for e in events if isinstance(e, BeliefEvent)]
+    assert len(recorded) == 6  # before each of the 5 moves, and after the last
+    moves = [e for e in events if isinstance(e, CommandEvent) and e.message[:2] in ("w0", "r0")]
+    assert recorded[-1].time > moves[-1].time  # the last frame's estimate is where it ends
     recording = Recording.load(folder)
     assert recording.check.matches
     last = recording.frames[-1].belief
@@ -209,7 +212,7 @@ def test_a_recorded_run_replays_with_the_same_beliefs(tmp_path: Path) -> None:
     assert all(frame.belief is None for frame in recording.frames[:first])
     assert recording.frames[first + 1].belief is not None  # the next frame shows it
     report = json.loads((folder / "report.json").read_text())["outcome"]
-    assert report["estimates"] == 5
+    assert report["estimates"] == 6
     assert "localized_at" in report
     result = CliRunner().invoke(app, ["plot", str(folder)])
     assert result.exit_code == 0, result.output
@@ -269,7 +272,7 @@ def test_a_sweep_reports_time_to_localize_per_start_cell(tmp_path: Path) -> None
     assert result.exit_code in (0, 1), result.output
     with (out / "results.csv").open(newline="") as file:
         rows = list(csv.DictReader(file))
-    assert [row["estimates"] for row in rows] == ["8", "8", "8"]
+    assert [row["estimates"] for row in rows] == ["9", "9", "9"]
     assert all(float(row["localized_at"]) < 60 for row in rows)
     summary = (out / "summary.md").read_text()
     assert "time to localize median" in summary

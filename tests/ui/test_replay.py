@@ -27,10 +27,12 @@ from simmer.record import RunRecorder
 from simmer.ui.hud import LIT, paint_hud
 from simmer.ui.render import RecordingRenderer
 from simmer.ui.replay import (
+    MAX_FRAME_SECONDS,
     REPLAY_HELP,
     ReplayWindow,
     TimelineBar,
     paint_panel,
+    paint_timeline,
     replay_window_size,
     short_client,
 )
@@ -317,6 +319,34 @@ def test_the_window_draws_the_trail_where_the_trace_says_the_robot_was(
     press(window, pygame.K_HOME)  # back at the start: no trail yet
     assert not any(on_trail(window.screen, row) for row in rows)
     assert "T" in dict(REPLAY_HELP)
+
+
+def test_a_replay_plays_from_the_start_however_long_the_window_took_to_appear(
+    window: ReplayWindow, recording: Recording
+) -> None:
+    """The issue saw a replay open "at the end, paused": it plays from the start (as
+    run_replay starts it), but a first frame that took seconds (the window appearing on a busy
+    machine) moved the playhead past a short run's end. A frame now moves it on by
+    MAX_FRAME_SECONDS at most, and the end says how to play again."""
+    playhead = window.playhead
+    assert playhead.time == 0
+    playhead.playing = True  # as run_replay opens it
+    assert window.frame(30.0)  # the first frame after a 30 s stall
+    assert recording.duration > 2 * MAX_FRAME_SECONDS
+    assert (playhead.time, playhead.playing) == (MAX_FRAME_SECONDS, True)
+    while playhead.playing:
+        assert window.frame(30.0)
+    assert playhead.at_end
+
+    def state() -> str:
+        r = RecordingRenderer()
+        paint_timeline(r, window.timeline_rect.size, recording, playhead)
+        return str(r.of("text")[0][0])
+
+    assert state().startswith("end: Space")
+    press(window, pygame.K_SPACE)  # again, from the start
+    assert (playhead.time, playhead.playing) == (0, True)
+    assert state().startswith("playing")
 
 
 def test_keys_and_the_timeline_move_the_playhead(

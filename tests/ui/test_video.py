@@ -414,3 +414,29 @@ def test_a_video_of_a_run_without_a_window_shows_no_keys_and_no_speed(tmp_path: 
     panel = frames[False][caps]
     assert (panel == panel[0, 0]).all()  # the bare panel: no cap, no glyph
     assert not (frames[True][caps] == frames[True][caps][0, 0]).all()
+
+
+def test_a_belief_shown_after_the_last_frame_is_the_videos_last_frame(tmp_path: Path) -> None:
+    """The localization example's video ended on the estimate before its final move: a belief
+    shown after the last frame (the program then exits) is one frame more at the end."""
+    from simmer.client import Client
+    from simmer.runner import LocalLink
+    from simmer.ui.belief import ESTIMATE_COLOR
+
+    sim = Simulation.from_config()
+    robot = Client(LocalLink(sim), lockstep=True)
+    with VideoRecorder(sim, tmp_path / "run.gif", fps=10, window=False) as recorder:
+        robot.show(pose=(6.0, 42.0, 180.0))  # before the move
+        robot.drive("w0", 12)
+        robot.wait_idle()
+        before = recorder.frames
+        robot.show(pose=(30.0, 6.0, 180.0))  # after it (away from the robot, drawn over it)
+    assert recorder.frames == before + 1
+    last = pygame.surfarray.array3d(recorder.canvas.surface).transpose(1, 0, 2)
+    view = recorder.canvas.view
+    ring = [(30.0 + 0.6 * math.cos(a), 6.0 + 0.6 * math.sin(a)) for a in np.linspace(0, 6, 12)]
+    assert min(off_by(last, view, point, ESTIMATE_COLOR) for point in ring) < 30
+    with VideoRecorder(sim, tmp_path / "still.gif", fps=10, window=False) as still:
+        sim.step(3)
+        frames = still.frames
+    assert still.frames == frames  # nothing shown since: no frame added

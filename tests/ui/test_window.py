@@ -26,6 +26,7 @@ import pytest
 from simmer import Simulation
 from simmer.client import connect
 from simmer.colors import TRAIL_COLOR
+from simmer.devices.base import Segment
 from simmer.geometry import Pose
 from simmer.localize.messages import Localization
 from simmer.options import RunOptions
@@ -38,6 +39,7 @@ from simmer.ui.bridge import Controls, PlaceRobot
 from simmer.ui.hud import ALARM, HELP, LIT, TEXT, paint_hud
 from simmer.ui.scene import default_window_size
 from simmer.ui.window import LocalControls, faster, slower
+from simmer.view.snapshot import Snapshot
 from simmer.world.outcome import Outcome, OutcomeReport
 
 from helpers import wait_for
@@ -225,6 +227,24 @@ def test_h_toggles_help(window: Window) -> None:
     key(pygame.K_h, unicode="h")
     tick(window)
     assert not window.show_help
+
+
+def test_the_path_so_far_is_drawn_over_the_rays_of_a_short_drive(window: Window) -> None:
+    """Straight back along a short drive, the rear sensor's ray covered the path (the test
+    below turns first so that none does): the path is painted over the rays now."""
+    sim = window.bridge.sim
+    sim.command("w0-6")  # from (6, 42) up to (6, 36): the rear ray looks back along it
+    # (the robot covers the path up to y = 40)
+    assert sim.run_until_idle()
+    tick(window)
+    pixels = [window.view.point(6.0, y) for y in np.arange(41.0, 42.5, 0.5)]
+    colours = [tuple(window.screen.get_at((round(x), round(y))))[:3] for x, y in pixels]
+    assert all(colour == TRAIL_COLOR for colour in colours), colours
+    shapes = Snapshot.of(sim).shapes
+    assert any(  # a ray does lie along it
+        isinstance(s, Segment) and abs(s.start.x - 6) < 0.5 and abs(s.end.x - 6) < 0.5
+        and s.end.y > 42 for s in shapes
+    )  # fmt: skip
 
 
 def test_t_shows_and_hides_the_path_driven_so_far(window: Window) -> None:

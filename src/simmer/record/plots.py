@@ -57,6 +57,7 @@ from simmer.scene import (
     maze_items,
     placed_block,
     placed_robot,
+    put_down_block,
     robot_items,
 )
 from simmer.untrusted import drawable, read_at_most
@@ -226,6 +227,19 @@ class RecordedRun:
     estimates: list[Estimate] = field(default_factory=list)
     """The program's reported poses (``robot.report_pose`` or shown), at most
     :data:`~simmer.world.localization.MAX_ERRORS`."""
+    handled: Handled | None = None
+    """A project run's pickup and delivery (from ``report.json``), if it picked the block up."""
+
+
+@dataclass(frozen=True)
+class Handled:
+    """When a project run picked its block up, and when and in which zone it put it down
+    (``delivered`` True: its target; None: it never did)."""
+
+    picked_up: float
+    put_down: float | None = None
+    zone: str | None = None
+    delivered: bool = False
 
 
 @dataclass(frozen=True)
@@ -278,6 +292,7 @@ def read_run(folder: str | Path) -> RecordedRun:
         run = _read_manifest(folder / MANIFEST_FILE, folder, trace)
         if (folder / EVENTS).is_file():
             _read_events(folder / EVENTS, run)
+        run.handled = _handled(folder)
     except RunFolderError as exc:  # the reader's one line, naming the file
         raise PlotError(str(exc)) from None
     return run
@@ -376,6 +391,33 @@ def _scenario(value: Any) -> RecordedScenario | None:
         return None
     x, y, heading, bx, by = (float(v) for v in numbers)
     return RecordedScenario((x, y, heading), (bx, by), target if isinstance(target, str) else None)
+
+
+def _handled(folder: Path) -> Handled | None:
+    """A project run's pickup and delivery as its ``report.json`` has them; None if it has
+    none (no report, another kind of run, or no pickup). RunFolderError if it cannot be read."""
+    from simmer.record.runfolder import REPORT_JSON, read_json
+
+    if not (folder / REPORT_JSON).is_file():
+        return None
+    try:
+        outcome = read_json(folder / REPORT_JSON).get("outcome")
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
+    if not isinstance(outcome, dict):
+        return None
+    picked = _float(outcome.get("picked_up_at"))
+    if not math.isfinite(picked):
+        return None
+    delivered = _float(outcome.get("delivered_at"))
+    if math.isfinite(delivered):
+        zone = outcome.get("target")
+        return Handled(picked, delivered, zone if isinstance(zone, str) else None, True)
+    wrong = _float(outcome.get("wrong_zone_at"))
+    zone = outcome.get("wrong_zone")
+    if math.isfinite(wrong) and isinstance(zone, str):
+        return Handled(picked, wrong, zone)
+    return Handled(picked)
 
 
 def _settings(path: Path, data: dict[str, Any]) -> Settings:
@@ -708,14 +750,19 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     draw_items(ax, maze_scene)
     walls = next(item for item in maze_scene if isinstance(item, Walls))
     wall = _line(rgb(walls.color), "-", "wall")
-    start, block = _draw_block_and_start(ax, settings, run.scenario)
+    handles: list[Any] = []
+    start, block = _draw_block_and_start(ax, settings, run.scenario, run.handled is None)
+    if run.handled is not None:
+        handles += _draw_handled(ax, run, run.handled)
+        put_down = run.handled.put_down is not None
+        block = _line(rgb(settings.block_color), "s", "block where it was put down", mec="black")
     for p in range(trace.parts):
         rows = trace.part == p
         ax.plot(trace.x[rows], trace.y[rows], color=PATH_COLOR, lw=2.4, zorder=4)
     end = (float(trace.x[-1]), float(trace.y[-1]), float(trace.heading[-1]))
     _draw_robot(ax, settings, end, TRAIL_COLOR, dashed=True)
     ax.plot(end[0], end[1], "s", ms=7, mfc=PATH_COLOR, mec="black", zorder=6)
-    handles = [_line(PATH_COLOR, "-", "path driven"), start]
+    handles += [_line(PATH_COLOR, "-", "path driven"), start]
     handles.append(_line(PATH_COLOR, "s", "end (outline, heading)", mec="black"))
     handles += _draw_commands(ax, run, scale)
     if run.collisions:
@@ -729,7 +776,7 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
         (x, y), mark = trace.positions(run.reached[:1])[0], run.reached[0]
         ax.plot(x, y, "*", ms=18, mfc="gold", mec="black", zorder=7)
         handles.append(_line("gold", "*", f"block reached ({mark.time:.2f} s)", mec="black"))
-    handles += [block, wall]
+    handles += [block, wall] if run.handled is None or put_down else [wall]
     ax.set_xlim(-margin, maze.width + margin)
     ax.set_ylim(maze.height + margin, -margin)  # +y down the page, as in the window
     ax.set_aspect("equal")
@@ -744,21 +791,63 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
 
 
 def _draw_block_and_start(
-    ax: Axes, settings: Settings, scenario: RecordedScenario | None = None
+    ax: Axes, settings: Settings, scenario: RecordedScenario | None = None, block: bool = True
 ) -> tuple[Any, Any]:
-    """The block and the robot's outline and heading at the start (a project run's drawn
-    ones if known); legend entries for the start and the block."""
+    """The block (unless ``block`` is False: a project run's block is drawn where it was put
+    down) and the robot's outline and heading at the start (a project run's drawn ones if
+    known); legend entries for the start and the block."""
     polygon = placed_block(settings, scenario.block if scenario is not None else None)
     start = scenario.start if scenario is not None else (
         *settings.robot_start_position, settings.robot_start_rotation
     )  # fmt: skip
-    draw_items(ax, block_items(polygon, settings, Look.PAGE))
+    if block:
+        draw_items(ax, block_items(polygon, settings, Look.PAGE))
     _draw_robot(ax, settings, start, START_RGB)
     ax.plot(start[0], start[1], "o", ms=8, mfc=START_COLOR, mec="white", zorder=6)
     return (
         _line(START_COLOR, "o", "start (outline, heading)", mec="white"),
         _line(rgb(settings.block_color), "s", "block", mec="black"),
     )
+
+
+PICKUP_COLOR = "#1a9850"
+DELIVERY_COLOR = "#6a3d9a"
+
+
+def _pose_at(trace: Trace, time: float) -> tuple[float, float, float]:
+    """The robot's pose at the first trace sample at or after ``time`` of the run's first
+    part (the milestones' clock), or its last sample; the gripper acts between steps, so a
+    sample has the pose it acted at."""
+    rows = np.flatnonzero(trace.part == 0)
+    at = rows[min(int(np.searchsorted(trace.time[rows], time - 1e-9)), len(rows) - 1)]
+    return float(trace.x[at]), float(trace.y[at]), float(trace.heading[at])
+
+
+def _draw_handled(ax: Axes, run: RecordedRun, handled: Handled) -> list[Any]:
+    """A project run's block: faint where it lay, solid where it was put down (moved with the
+    robot from the pickup on, as the gripper holds it), a mark at the robot's place at the
+    pickup and at the delivery; their legend entries."""
+    from matplotlib.patches import Polygon
+
+    settings, scenario = run.settings, run.scenario
+    at = scenario.block if scenario is not None else None
+    lying = placed_block(settings, at)
+    colour = rgb(settings.block_color)
+    ax.add_patch(Polygon(lying, closed=True, fc=colour, ec="black", ls="--", alpha=0.35, zorder=3))
+    handles = [_line(colour, "s", "block where it lay (faint)", mec="black")]
+    px, py, ph = _pose_at(run.trace, handled.picked_up)
+    ax.plot(px, py, "^", ms=13, mfc=PICKUP_COLOR, mec="white", mew=1.2, zorder=9)
+    handles.append(_line(PICKUP_COLOR, "^", f"picked up ({handled.picked_up:.1f} s)", mec="white"))
+    if handled.put_down is not None:
+        put = _pose_at(run.trace, handled.put_down)
+        polygon = put_down_block(settings, at, (px, py, ph), put)
+        draw_items(ax, block_items(polygon, settings, Look.PAGE))
+        x, y, _ = put
+        ax.plot(x, y, "v", ms=13, mfc=DELIVERY_COLOR, mec="white", mew=1.2, zorder=9)
+        where = "delivered to" if handled.delivered else "put down in"
+        said = f"{where} {handled.zone or 'a zone'} ({handled.put_down:.1f} s)"
+        handles.append(_line(DELIVERY_COLOR, "v", said, mec="white"))
+    return handles
 
 
 def _draw_robot(

@@ -1,12 +1,13 @@
 """The pictures of a sweep's summary: success rate per setting with 95% Wilson intervals, final
 positions over the maze marked by how each run ended, the Task 2 time's distribution per
-setting, and with a random sample, success against each sampled key. Matplotlib (Agg, no
-pyplot) is imported only when they are drawn."""
+setting (a project sweep's score and delivery time instead), and with a random sample, success
+against each sampled key. Matplotlib (Agg, no pyplot) is imported only when they are drawn."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,9 +31,15 @@ FAILURE_MARKERS = {
     "collision": ("X", "collision"),
     "timeout": ("s", "timeout"),
     "stopped-short": ("v", "stopped short"),
+    "no-pickup": ("v", "no pickup"),
+    "not-delivered": ("P", "not delivered"),
+    "wrong-zone": ("*", "wrong zone"),
     "condition": ("D", "condition false"),
 }
 """How each kind of failure is marked among the final positions (a crashed run has none)."""
+SCORE_STEP = 5.0
+"""Points each bar of a project sweep's score histogram spans (milestones earn tens, a
+collision costs 2)."""
 SAMPLE_BINS = 8
 """Bins at most along a sampled key (fewer for few draws: about 5 runs a bin at least)."""
 
@@ -52,11 +59,9 @@ def draw_pictures(
         drawn.append(("success_rate.png", "Success rate per setting, with 95% Wilson intervals"))
         _save(_positions_figure(spec, rows), folder / "final_positions.png")
         drawn.append(("final_positions.png", "Where each run ended, marked by how it ended"))
-        task2 = _task2_figure(spec, rows, summaries)
-        if task2 is not None:
-            _save(task2, folder / "task2_time.png")
-            caption = "Task 2 time (first motion to the block) of the runs that reached it"
-            drawn.append(("task2_time.png", caption))
+        for name, caption, figure in _time_figures(spec, rows, summaries):
+            _save(figure, folder / name)
+            drawn.append((name, caption))
         if spec.sample:
             _save(_sample_figure(spec, rows), folder / "sampled.png")
             caption = "Success rate against each sampled key, all settings together"
@@ -365,36 +370,93 @@ def _positions_figure(spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -> Fig
     return fig
 
 
-def _task2_figure(
+def _time_figures(
     spec: SweepSpec, rows: Sequence[Mapping[str, str]], summaries: Sequence[SettingSummary]
+) -> list[tuple[str, str, Figure]]:
+    """The histograms a sweep's runs call for, each file name, caption and figure: a
+    project sweep's score and delivery time, another's Task 2 time (none drawn if no run
+    has the figure)."""
+    if spec.project:
+        wanted = [
+            ("score.png", "Score of every run (the rubric's points), per setting",
+             Histogram("score", "scored", "score (points)", "Score of every run", " points",
+                       SCORE_STEP)),
+            ("delivery_time.png",
+             "Delivery time (simulated seconds from the start) of the runs that delivered "
+             "the block to its target",
+             Histogram("delivered_at", "delivered", "delivery time (s), from the start",
+                       "Delivery time of the runs that delivered the block")),
+        ]  # fmt: skip
+    else:
+        wanted = [
+            ("task2_time.png", "Task 2 time (first motion to the block) of the runs that "
+             "reached it",
+             Histogram("task2_time", "reached", "Task 2 time (s), from the first motion to "
+                       "reaching the block", "Task 2 time of the runs that reached the block")),
+        ]  # fmt: skip
+    drawn = []
+    for name, caption, histogram in wanted:
+        figure = _histogram_figure(spec, rows, summaries, histogram)
+        if figure is not None:
+            drawn.append((name, caption, figure))
+    return drawn
+
+
+@dataclass(frozen=True)
+class Histogram:
+    """One histogram per setting of a results column: its column, what a run with a value
+    did, the x axis's label and the figure's title."""
+
+    column: str
+    did: str
+    axis: str
+    title: str
+    unit: str = " s"
+    step: float | None = None
+    """Each bar's width, bars from 0 up to 100 at least (a score's): all 100s are one bar on
+    a 0-to-100 axis, not one in the middle of 99.6 to 100.4; None: bins fitted to the data."""
+
+
+def _histogram_figure(
+    spec: SweepSpec,
+    rows: Sequence[Mapping[str, str]],
+    summaries: Sequence[SettingSummary],
+    histogram: Histogram,
 ) -> Figure | None:
-    """A histogram of the Task 2 time per setting (shared bins and axis), of the runs that
-    reached the block; None if none did."""
+    """A histogram of a column per setting (shared bins and axis), of the runs with a value;
+    None if none has one."""
     from matplotlib.figure import Figure
 
+    column = histogram.column
     times = [
-        [float(r["task2_time"]) for r in rows if _in(spec, s, r) and r["task2_time"]]
-        for s in summaries
+        [float(r[column]) for r in rows if _in(spec, s, r) and r.get(column)] for s in summaries
     ]
     every = [t for group in times for t in group]
     if not every:
         return None
-    bins = np.histogram_bin_edges(every, bins=min(30, max(8, 2 * round(math.sqrt(len(every))))))
+    if histogram.step is not None:
+        step = histogram.step
+        low = min(0.0, math.floor(min(every) / step) * step)
+        high = max(100.0, math.floor(max(every) / step) * step) + step
+        bins = np.arange(low, high + step / 2, step)
+    else:
+        count = min(30, max(8, 2 * round(math.sqrt(len(every)))))
+        bins = np.histogram_bin_edges(every, bins=count)
     fig = Figure(figsize=(7.0, 1.0 + 1.25 * len(summaries)), layout="constrained")
     axes = fig.subplots(len(summaries), 1, sharex=True, squeeze=False)[:, 0]
     for ax, s, group in zip(axes, summaries, times, strict=True):
         counts, _, _ = ax.hist(group, bins=bins, color=HISTOGRAM_COLOR)
-        reached = f"{len(group)}/{s.runs} reached"
+        reached = f"{len(group)}/{s.runs} {histogram.did}"
         if group:
-            reached += f", median {np.median(group):.2f} s"
+            reached += f", median {float(np.median(group)):.4g}{histogram.unit}"
         ax.set_title(f"{_label(spec, s.setting, ', ')}: {reached}", loc="left", fontsize=8)
         ax.set_ylim(0, max(1.0, float(np.max(counts))) * 1.1)
         ax.set_ylabel("runs", fontsize=8)
         ax.yaxis.get_major_locator().set_params(integer=True)
         ax.tick_params(labelsize=8)
         ax.grid(axis="x", alpha=0.3)
-    axes[-1].set_xlabel("Task 2 time (s), from the first motion to reaching the block")
-    fig.suptitle("Task 2 time of the runs that reached the block", fontsize=10)
+    axes[-1].set_xlabel(histogram.axis)
+    fig.suptitle(histogram.title, fontsize=10)
     return fig
 
 

@@ -23,10 +23,10 @@ from simmer.sweep.spec import SweepSpec
 if TYPE_CHECKING:
     from simmer.config import SimConfig
 from simmer.sweep.success import (
-    FAILURES,
     OUTCOME_FIELDS,
     PROJECT_FIELDS,
     failure_kind,
+    failures,
     flat_outcome,
 )
 
@@ -109,7 +109,7 @@ def row(run: RunSpec, result: RunResult, folder: str = "", project: bool = False
         *map(_cell, run.setting),
         str(run.seed),
         str(result.success),
-        failure_kind(result.status, flat_outcome(result.outcome), result.success),
+        failure_kind(result.status, flat_outcome(result.outcome), result.success, project),
         *outcome_cells(result, project),
         result.status,
         _cell(result.exit_status),
@@ -287,6 +287,7 @@ def write_summary(
         "",
         *_fixed_noise(spec),
         *_localized(rows),
+        *(_project(rows) if spec.project else []),
         "| "
         + " | ".join(
             [
@@ -295,22 +296,25 @@ def write_summary(
                 "successes",
                 "rate",
                 "95% interval",
+                *(PROJECT_CELLS if spec.project else ()),
                 "failures",
                 "statuses",
             ]
         )
         + " |",
-        "|" + "---|" * (len(columns) + 6),
+        "|" + "---|" * (len(columns) + 6 + (len(PROJECT_CELLS) if spec.project else 0)),
     ]
     for s in summaries:
         a, b = s.interval
+        members = [r for r in rows if tuple(r[c] for c in columns) == s.setting]
         cells = [
             *s.setting,
             str(s.runs),
             str(s.successes),
             _rate(s.successes, s.runs),
             f"{a:.3f} to {b:.3f}",
-            _listed(s.failures, FAILURES) or "-",
+            *(_project_cells(members) if spec.project else ()),
+            _listed(s.failures, failures(spec.project)) or "-",
             _listed(s.statuses),
         ]
         lines.append("| " + " | ".join(_escape(c) for c in cells) + " |")
@@ -370,6 +374,98 @@ def _fixed_noise(spec: SweepSpec) -> list[str]:
     ]
 
 
+def _numbers(rows: Sequence[Mapping[str, str]], column: str) -> list[float]:
+    """A column's values in the runs that have one."""
+    return [float(r[column]) for r in rows if r.get(column)]
+
+
+def score_figures(scores: Sequence[float]) -> str:
+    """Scores as the summary says them: mean ± standard deviation, median and range."""
+    if not scores:
+        return "-"
+    spread = statistics.stdev(scores) if len(scores) > 1 else 0.0
+    return (
+        f"mean {statistics.fmean(scores):.1f} ± {spread:.1f} (median "
+        f"{statistics.median(scores):g}, from {min(scores):g} to {max(scores):g})"
+    )
+
+
+def delivery_figures(times: Sequence[float]) -> str:
+    """Delivery times as the summary says them: median, mean and range, in seconds."""
+    if not times:
+        return "none delivered"
+    return (
+        f"median {statistics.median(times):.1f} s (mean {statistics.fmean(times):.1f} s, "
+        f"from {min(times):.1f} to {max(times):.1f} s)"
+    )
+
+
+def _project(rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """A project sweep's lines: score, delivery rate and time, and how far the runs got."""
+    scores = _numbers(rows, "score")
+    delivered = sum(r.get("delivered") == "True" for r in rows)
+    low, high = wilson_interval(delivered, len(rows))
+    reached = ", ".join(
+        f"{name} {sum(r.get(column) == 'True' for r in rows)}"
+        for column, name in (
+            ("entered_loading", "entered the loading zone"),
+            ("picked_up", "picked up the block"),
+            ("left_loading", "left the loading zone holding it"),
+            ("delivered", "delivered it to the target"),
+        )
+    )
+    wrong = sum(bool(r.get("wrong_zone")) for r in rows)
+    return [
+        f"Score (the rubric's points, of the {_plural(len(scores), 'run')} with one): "
+        f"{score_figures(scores)}.",
+        "",
+        f"Delivered to the target in {delivered}/{len(rows)} = {_rate(delivered, len(rows))} "
+        f"(95% Wilson interval {low:.3f} to {high:.3f}); delivery time (simulated seconds "
+        f"from the start) {delivery_figures(_numbers(rows, 'delivered_at'))}.",
+        "",
+        f"How far the {len(rows)} runs got: {reached}"
+        + (f"; {wrong} delivered it to another zone." if wrong else "."),
+        "",
+    ]
+
+
+PROJECT_CELLS = ("mean score (sd)", "delivered", "median delivery time")
+"""A project sweep's columns of the per-setting table, after the success rate."""
+
+
+def _project_cells(rows: Sequence[Mapping[str, str]]) -> list[str]:
+    """A setting's :data:`PROJECT_CELLS`."""
+    scores = _numbers(rows, "score")
+    spread = statistics.stdev(scores) if len(scores) > 1 else 0.0
+    times = _numbers(rows, "delivered_at")
+    delivered = sum(r.get("delivered") == "True" for r in rows)
+    return [
+        f"{statistics.fmean(scores):.1f} ({spread:.1f})" if scores else "-",
+        f"{delivered}/{len(rows)}",
+        f"{statistics.median(times):.1f} s" if times else "-",
+    ]
+
+
+def _milestones(r: Mapping[str, str]) -> list[str]:
+    """A project run's facts for the gallery: its milestones with their times, its score."""
+    met = [
+        f"{name} at {float(r[column + '_at']):.1f} s"
+        for column, name in (
+            ("entered_loading", "entered the loading zone"),
+            ("picked_up", "picked up"),
+            ("left_loading", "left the loading zone"),
+            ("delivered", "delivered"),
+        )
+        if r.get(column) == "True" and r.get(column + "_at")
+    ]
+    if r.get("wrong_zone"):
+        met.append(f"delivered to {r['wrong_zone']}, not {r.get('target') or 'its target'}")
+    if r.get("picked_up") != "True":
+        met.append("never picked up the block")
+    score = f"score {float(r['score']):g}" if r.get("score") else "no score"
+    return [*met, score]
+
+
 def _localized(rows: Sequence[Mapping[str, str]]) -> list[str]:
     """A line on time to localize, if any run's program reported its pose."""
     reported = [r for r in rows if r.get("estimates")]
@@ -415,10 +511,11 @@ def _gallery(folder: Path, spec: SweepSpec, rows: Sequence[Mapping[str, str]]) -
         "",
         "## Failing runs",
         "",
-        f"{_plural(len(failed), 'run')} failed: {_listed(kinds, FAILURES)} (the `failure` "
+        f"{_plural(len(failed), 'run')} failed: {_listed(kinds, failures(spec.project))} "
+        "(the `failure` "
         f"column of results.csv). {kept}",
     ]
-    for kind, meaning in FAILURES.items():
+    for kind, meaning in failures(spec.project).items():
         members = [r for r in failed if r["failure"] == kind]
         if not members:
             continue
@@ -511,7 +608,9 @@ def _happened(r: Mapping[str, str]) -> str:
     if r["collisions"] != "0":
         collisions = _plural(int(r["collisions"]), "collision")
         facts.append(f"{collisions}, the first at {float(r['first_collision']):.1f} s")
-    if r["reached"] == "True":
+    if "score" in r:  # a project run: its milestones and score, not Lab 1's Task 2 time
+        facts += _milestones(r)
+    elif r["reached"] == "True":
         facts.append(f"Task 2 time {float(r['task2_time']):.1f} s")
     facts.append(f"ended at ({float(r['final_x']):.1f}, {float(r['final_y']):.1f}) in")
     if status == RunEnd.ERROR and r["detail"]:

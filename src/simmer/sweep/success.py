@@ -84,6 +84,18 @@ FAILURES = {
     "crashed": "the controller failed, the worker died or the configuration was invalid",
 }
 """How a run can fail (the ``failure`` column), in the order the summary shows them."""
+PROJECT_FAILURES = {
+    "collision": "collided with a wall or the block",
+    "timeout": "stopped by the simulated-time or the wall-clock limit",
+    "no-pickup": "finished without picking up the block",
+    "not-delivered": "picked up the block but finished without delivering it",
+    "wrong-zone": "delivered the block to another drop-off zone than its target",
+    "condition": "delivered the block to its target, but the success condition was false",
+    "crashed": "the controller failed, the worker died or the configuration was invalid",
+}
+"""How a project run can fail (a project sweep's ``failure`` column), in the summary's order:
+the block's milestones, not Lab 1's "reached the block" (a run that picked the block up and
+scored 30 did not "stop short")."""
 CRASHED_STATUSES = frozenset({RunEnd.ERROR, RunEnd.CRASHED, RunEnd.INVALID})
 MAX_EXPRESSION_CHARS = 1000
 """Characters of a success condition: the default has 27; a longer one is not a condition
@@ -101,10 +113,19 @@ def flat_outcome(outcome: Mapping[str, Any] | None) -> dict[str, Any]:
     return fields
 
 
-def failure_kind(status: str, fields: Mapping[str, Any], success: bool) -> str:
-    """How a run failed (a key of :data:`FAILURES`), or "" if it succeeded. The controller's
-    own failure comes first, then a collision (the most telling cause, even if a limit ended
-    the run later), then a limit, then where the robot stopped."""
+def failures(project: bool) -> dict[str, str]:
+    """The kinds of failure and their meanings: :data:`PROJECT_FAILURES` for a project sweep,
+    :data:`FAILURES` otherwise."""
+    return PROJECT_FAILURES if project else FAILURES
+
+
+def failure_kind(
+    status: str, fields: Mapping[str, Any], success: bool, project: bool = False
+) -> str:
+    """How a run failed (a key of :data:`FAILURES`, or with ``project`` of
+    :data:`PROJECT_FAILURES`), or "" if it succeeded. The controller's own failure comes
+    first, then a collision (the most telling cause, even if a limit ended the run later),
+    then a limit, then how far it got: the block reached, or a project run's milestones."""
     if success:
         return ""
     if status in CRASHED_STATUSES or not fields:
@@ -113,6 +134,12 @@ def failure_kind(status: str, fields: Mapping[str, Any], success: bool) -> str:
         return "collision"
     if status in (RunEnd.TIMEOUT, RunEnd.SECONDS):
         return "timeout"
+    if project:
+        if fields.get("delivered"):
+            return "condition"
+        if fields.get("wrong_zone"):
+            return "wrong-zone"
+        return "not-delivered" if fields.get("picked_up") else "no-pickup"
     return "condition" if fields.get("reached") else "stopped-short"
 
 

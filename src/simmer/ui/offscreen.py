@@ -146,7 +146,8 @@ class OffscreenRenderer:
             paint_belief(r, self.view, snap.belief, (maze.width, maze.height))
             if len(r.dirty) > 1:  # thousands of particles: one rectangle to restore
                 r.dirty[:] = [r.dirty[0].unionall(r.dirty[1:])]
-        self.painter.paint_dynamic(r, self.view, snap)
+        shown = snap.trail if self.show_trail else None
+        self.painter.paint_dynamic(r, self.view, snap, shown.points if shown else None)
         paint_blocked(r, self.view, snap)
         paint_hud(r, snap, surface.get_width(), keys=self.keys)
         if show_help:

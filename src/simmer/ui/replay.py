@@ -44,6 +44,10 @@ ROW = 18
 """Pixels per command in the list."""
 DISPLAY_RATE = 60
 """Frames per second the window draws at most."""
+MAX_FRAME_SECONDS = 0.5
+"""Wall-clock seconds one frame moves the playhead on at most (times its speed): a window
+that took seconds to appear, or a stalled frame, slows the replay down instead of skipping
+it (a short run opened at its end, paused, on a busy machine)."""
 COLUMNS = (("time", 12), ("command", 64), ("replies", 174), ("from", 338))
 """The command list's columns: heading and left edge."""
 MATCH: Color = (120, 220, 120)
@@ -185,7 +189,7 @@ def paint_timeline(
     width, height = size
     r.fill(BOX)
     r.draw_segment((0, 0), (width, 0), UNLIT, 2)
-    state = "playing" if playhead.playing else "paused"
+    state = "playing" if playhead.playing else "end: Space" if playhead.at_end else "paused"
     r.draw_text(f"{state}  x{playhead.speed:g}", (12, 8), TEXT if playhead.playing else LIT, 22)
     shown = recording.timeline.frame_time(playhead.frame)
     r.draw_text(f"{shown:.2f} / {recording.duration:.2f} s", (12, 32), TEXT, 18)
@@ -274,7 +278,7 @@ class ReplayWindow:
             if not self.handle(event):
                 return False
         if not self.dragging:
-            self.playhead.advance(seconds)
+            self.playhead.advance(min(seconds, MAX_FRAME_SECONDS))
         if self.draw() and self._own_display:
             pygame.display.flip()
         return True
@@ -413,7 +417,8 @@ def run_replay(recording: Recording, echo: Callable[[str], None] | None = None) 
         window.close()
         raise SimmerError(f"no screen found (SDL video driver {driver!r}); {instead}")
     if echo is not None:
-        echo("replay window open (press h for the keys)")
+        echo("replay window open, playing from the start (Space: pause, or at the end play "
+             "again; h: the keys)")  # fmt: skip
     window.playhead.playing = True
     try:
         window.run()

@@ -12,6 +12,7 @@ it.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -243,9 +244,21 @@ class ScenePainter:
 
     # ----------------------------------------------------------------- dynamic layer
 
-    def paint_dynamic(self, r: Renderer, view: View, snap: Snapshot) -> None:
-        """Block, robot (with a heading mark), visible devices, measurements, drag ghost."""
+    def paint_dynamic(
+        self, r: Renderer, view: View, snap: Snapshot, trail: FloatArray | None = None
+    ) -> None:
+        """Measurements (the sensors' rays), then the path so far where they cross it (the
+        static layer's ``trail``, None: not shown), then block, robot (with a heading mark),
+        visible devices, drag ghost: a ray back along a short drive once hid the path."""
         settings = self.settings
+        line = max(1, round(view.ppi / 8))  # 2 px at the default 16 ppi: visible on white tiles
+        for shape in snap.shapes:
+            if isinstance(shape, Segment):
+                r.draw_segment(view.point(*shape.start), view.point(*shape.end), shape.color, line)
+            elif isinstance(shape, Circle):
+                r.draw_circle(view.point(*shape.center), shape.radius * view.ppi, shape.color, 2)
+        if trail is not None and len(trail) and snap.shapes:
+            self.paint_trail(r, view, _near_shapes(trail, snap.shapes))
         if self.zones is not None:
             paint_items(r, view, target_items(self.zones, snap.target, self.maze.cell))
         paint_items(r, view, block_items(snap.block, settings, Look.WINDOW))
@@ -257,11 +270,28 @@ class ScenePainter:
         label_size = max(10, round(view.ppi * 0.9))
         for index, text, color in layout.labels:
             r.draw_text(text, points[index], color, label_size, centered=True)
-        line = max(1, round(view.ppi / 8))  # 2 px at the default 16 ppi: visible on white tiles
-        for shape in snap.shapes:
-            if isinstance(shape, Segment):
-                r.draw_segment(view.point(*shape.start), view.point(*shape.end), shape.color, line)
-            elif isinstance(shape, Circle):
-                r.draw_circle(view.point(*shape.center), shape.radius * view.ppi, shape.color, 2)
         if snap.ghost is not None:
             r.draw_polygon(view.points(snap.ghost), GHOST_COLOR, 2)
+
+
+def _near_shapes(points: FloatArray, shapes: Sequence[Segment | Circle]) -> FloatArray:
+    """The trail's ``points`` within the measurements' bounding box (an inch around), the rest
+    NaN (a NaN splits the trail): only what a ray may cover is painted again each frame, not
+    a long run's whole path."""
+    ends: list[tuple[float, float]] = []
+    for shape in shapes:
+        if isinstance(shape, Segment):
+            ends += [(shape.start.x, shape.start.y), (shape.end.x, shape.end.y)]
+        else:
+            cx, cy, radius = shape.center.x, shape.center.y, shape.radius
+            ends += [(cx - radius, cy - radius), (cx + radius, cy + radius)]
+    box = np.asarray(ends, dtype=np.float64)
+    (left, top), (right, bottom) = box.min(axis=0) - 1.0, box.max(axis=0) + 1.0
+    x, y = points[:, 0], points[:, 1]
+    inside = (x >= left) & (x <= right) & (y >= top) & (y <= bottom)
+    kept = inside.copy()
+    kept[1:] |= inside[:-1]  # a piece with one end inside is drawn whole
+    kept[:-1] |= inside[1:]
+    result = points.copy()
+    result[~kept] = np.nan
+    return result

@@ -51,6 +51,8 @@ if TYPE_CHECKING:
     import av.container
     from PIL import Image
 
+    from simmer.localize.belief import Belief
+
 __all__ = ["VideoRecorder"]
 
 log = logging.getLogger("simmer.video")
@@ -316,6 +318,8 @@ class VideoRecorder:
         self.failure: BaseException | None = None
         """What stopped the writer thread, if anything did."""
         self._closed = False
+        self._belief: Belief | None = None
+        """The belief the last frame handed over shows."""
         self._queue: queue.Queue[tuple[Snapshot, int] | None] = queue.Queue(BACKLOG)
         self._thread = threading.Thread(target=self._write, name="simmer-video", daemon=True)
         self._thread.start()
@@ -337,8 +341,10 @@ class VideoRecorder:
     def _hand_over(self, count: int) -> None:
         """Give the writer ``count`` frames of the simulation as it is now."""
         if self.failure is None:
-            self._queue.put((self.maker.snapshot(self.controls), count))
+            snap = self.maker.snapshot(self.controls)
+            self._queue.put((snap, count))
             self.frames += count
+            self._belief = snap.belief
 
     def _write(self) -> None:
         """The writer thread: draw and encode each snapshot; after a failure, drain."""
@@ -361,6 +367,8 @@ class VideoRecorder:
             return
         self._closed = True
         self.sim.remove_observer(self)
+        if self.maker.snapshot(self.controls).belief is not self._belief:
+            self._hand_over(1)  # shown after the last frame (the estimate after the last move)
         self.maker.close()
         self._queue.put(None)
         self._thread.join()

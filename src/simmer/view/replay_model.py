@@ -219,6 +219,13 @@ class _Collector:
             frame = Frame.of(self.maker.snapshot(self.controls), self.frames[-1])
             self.frames += [frame] * count
 
+    def finish(self) -> None:
+        """At the end: one more frame if the program showed a belief after the last frame
+        (the estimate after its last move), as the run's video has it."""
+        snap = self.maker.snapshot(self.controls)
+        if snap.belief is not self.frames[-1].belief:
+            self.frames.append(Frame.of(snap, self.frames[-1]))
+
 
 # ----------------------------------------------------------------------------- the check
 
@@ -396,6 +403,7 @@ class Recording:
                 result = feed(sim, events, until)
             finally:
                 writer.close()
+            collector.finish()
             replayed = read_trace_rows(replayed_path)
         difference = (
             None
