@@ -23,7 +23,7 @@ ScanAt = Annotated[
 
 @app.command(
     cls=Command,
-    short_help="Draw a recorded run: path.png and sensors.png (and a LiDAR's scans).",
+    short_help="Draw a recorded run: path.png, sensors.png, scans.",
     epilog=example("simmer plot runs/bias", "simmer plot runs/lidar --scan-at 2.5"),
 )
 def plot(folder: RunFolder, scan_at: ScanAt = None) -> None:
