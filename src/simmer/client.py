@@ -376,6 +376,24 @@ class Scan:
         """``angles, distances = robot.scan("l0")``."""
         return iter((self.angles, self.distances))
 
+    def points(
+        self, x: float, y: float, heading: float, mount: Sequence[float] = (0.0, 0.0, 0.0)
+    ) -> Any:
+        """Where the beams met something if the robot is at ``x, y, heading`` (your estimate),
+        world inches, (N, 2) (beams with no return left out): what ``robot.show(points=...)``
+        draws. ``mount``: the LiDAR's position and rotation on the robot, as configured (its
+        ``position`` x, y and ``rotation``; ``robot.maze()`` gives them)."""
+        import numpy as np
+
+        mx, my, rotation = (float(v) for v in mount)
+        h = math.radians(heading)
+        c, s = math.cos(h), math.sin(h)
+        cx, cy = x + mx * c - my * s, y + mx * s + my * c
+        hit = self.distances > 0
+        beam = np.radians(heading + rotation + self.angles[hit])
+        d = self.distances[hit]
+        return np.column_stack((cx - d * np.sin(beam), cy + d * np.cos(beam)))
+
 
 class Client:
     """A connection to the simulator or robot; use :func:`connect` to make one.
@@ -490,16 +508,19 @@ class Client:
         cov: Sequence[Sequence[float]] | None = None,
         path: Any = None,
         labels: Sequence[tuple[float, float, str]] = (),
+        points: Any = None,
     ) -> int:
         """Show your belief over the maze (the window, videos, the recording); free of
         simulated time. ``particles``: rows of x, y, heading, weight (a NumPy array does);
         ``cells``: a grid of probabilities, row 0 at y = 0; ``pose``: x, y, heading, with its
         uncertainty as ``ellipse`` (semi-axes a, b in inches, angle of a from +x) or ``cov``
         (the 2 x 2 covariance of x and y: a 2-sigma ellipse); ``path``: rows of x, y;
-        ``labels``: (x, y, text). Returns how many points were cut to fit the bounds
-        (docs/localization.md; -1: the message was dropped, over the shows a simulated
-        second); a cut is logged, at most once a wall second. ValueError if the simulator
-        refuses the belief (a grid of over 4,096 cells), with its reason.
+        ``labels``: (x, y, text); ``points``: rows of x, y, world points such as a scan placed
+        at your estimate (``robot.scan("l0").points(x, y, heading)``) or your map's. Returns
+        how many points were cut to fit the bounds (docs/localization.md; -1: the message was
+        dropped, over the shows a simulated second); a cut is logged, at most once a wall
+        second. ValueError if the simulator refuses the belief (a grid of over 4,096 cells),
+        with its reason.
         """
         data: list[str] = []
         given = _rows(particles)
@@ -517,6 +538,9 @@ class Client:
             data.append('"ellipse":' + json.dumps([float(v) for v in ellipse]))
         if path is not None:
             data.append('"path":' + _points(_rows(path)))
+        if points is not None:
+            placed = [row for row in _rows(points) if all(map(math.isfinite, row))]
+            data.append('"points":' + _points(placed))
         if labels:
             data.append(
                 '"labels":' + json.dumps([[float(x), float(y), str(t)] for x, y, t in labels])

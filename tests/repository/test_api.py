@@ -119,6 +119,7 @@ EXPORTED = {
         "load_run",
         "read_events",
         "read_manifest",
+        "read_scans",
         "retrace",
         "write_report_md",
     ],

@@ -25,10 +25,10 @@ from helpers import REPO
 
 SRC = REPO / "src" / "simmer"
 READER = "record/reader.py"
-NAMES = ("events.jsonl", "trace.csv")
-AS_PATH = re.compile(r"^\S*\b(events\.jsonl|trace\.csv)$")
+NAMES = ("events.jsonl", "trace.csv", "scans.csv")
+AS_PATH = re.compile(r"^\S*\b(events\.jsonl|trace\.csv|scans\.csv)$")
 """A string that is a recording's file name as a path (prose has spaces around it)."""
-IN_PROSE = re.compile(r"events\.jsonl|trace\.csv")
+IN_PROSE = re.compile(r"events\.jsonl|trace\.csv|scans\.csv")
 READING = {
     "read_text",
     "read_bytes",
@@ -210,7 +210,7 @@ def test_only_the_reader_names_and_reads_the_recordings() -> None:
     naming = {module for module, tree in named.items() if path_strings(tree)}
     assert naming == {READER}, "name events.jsonl and trace.csv by simmer.record.reader's constants"
     constants = set().union(*(name_constants(tree) for tree in named.values()))
-    assert constants == {"EVENTS", "TRACE"}
+    assert constants == {"EVENTS", "TRACE", "SCANS"}
     found = second_readers(modules(SRC, *NAMES, *constants))
     assert found == {}, "read events.jsonl and trace.csv with simmer.record.reader"
     assert csv_parsers(modules(SRC, *CSV_PARSERS)) == {READER, *OTHER_CSV}

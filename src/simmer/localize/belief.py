@@ -12,6 +12,9 @@ A belief is a JSON object with any of these keys (world inches, degrees from +y)
 * ``path``: ``[[x, y], ...]``, a planned path, at most :data:`MAX_PATH` points.
 * ``labels``: ``[[x, y, "text"], ...]``, at most :data:`MAX_LABELS` of :data:`MAX_LABEL_CHARS`
   characters.
+* ``points``: ``[[x, y], ...]``, points the program places in the world, at most
+  :data:`MAX_POINTS`: a LiDAR scan where the program believes its beams met walls
+  (``Scan.points``), or its own map's points.
 
 What is cut (points over a bound, entries that are not finite numbers) is counted, never
 silently lost: the count is the reply to the show message, is logged, and is kept in the
@@ -38,6 +41,8 @@ MAX_CELLS = 4096
 """Probabilities in one cell grid (a 64 x 64 grid)."""
 MAX_PATH = 1000
 """Points of a planned path."""
+MAX_POINTS = 1000
+"""World points (``points``) per show: a whole scan of up to 999 beams (``MAX_BEAMS``)."""
 MAX_LABELS = 20
 """Labels per show message."""
 MAX_LABEL_CHARS = 40
@@ -76,6 +81,8 @@ class Belief:
     ellipse: tuple[float, float, float] | None = None
     path: Float32Array = field(default_factory=lambda: _EMPTY[:, :2])
     labels: tuple[tuple[float, float, str], ...] = ()
+    points: Float32Array = field(default_factory=lambda: _EMPTY[:, :2])
+    """(N, 2) float32: world points (a scan placed by the program, map points)."""
 
     def to_json(self) -> str:
         """The belief as compact JSON (what a run's events keep): positions to 0.01 in,
@@ -95,6 +102,8 @@ class Belief:
             data["path"] = np.round(self.path.astype(np.float64), 2).tolist()
         if self.labels:
             data["labels"] = [[round(x, 3), round(y, 3), text] for x, y, text in self.labels]
+        if len(self.points):
+            data["points"] = np.round(self.points.astype(np.float64), 2).tolist()
         return json.dumps(data, separators=(",", ":"))
 
 
@@ -164,11 +173,11 @@ def read_belief(data: Any) -> tuple[Belief, int]:
     ValueError (one line) if ``data`` is not a belief."""
     if not isinstance(data, dict):
         raise ValueError('a belief is a JSON object such as {"particles": [[x, y, heading, w]]}')
-    unknown = set(data) - {"particles", "cells", "pose", "ellipse", "path", "labels"}
+    unknown = set(data) - {"particles", "cells", "pose", "ellipse", "path", "labels", "points"}
     if unknown:
         raise ValueError(
             f"unknown key {sorted(unknown)[0]!r} in a belief; the keys are particles, cells, "
-            "pose, ellipse, path and labels"
+            "pose, ellipse, path, labels and points"
         )
     particles, cut = _particles(data["particles"]) if "particles" in data else (_EMPTY, 0)
     cells = _cells(data["cells"]) if "cells" in data else None
@@ -189,7 +198,12 @@ def read_belief(data: Any) -> tuple[Belief, int]:
         x, y = _numbers(entry[:2], 2, "a label's x, y")
         labels.append((x, y, entry[2][:MAX_LABEL_CHARS]))
     cut += max(0, len(raw) - MAX_LABELS)
-    belief = Belief(particles, cells, pose, ellipse, path, tuple(labels))  # type: ignore[arg-type]
+    shown = _EMPTY[:, :2]
+    if "points" in data:
+        placed, cut_points = _rows(data["points"], 2, MAX_POINTS, "points")
+        cut += cut_points + max(0, len(placed) - MAX_POINTS)
+        shown = _frozen(placed[:MAX_POINTS])
+    belief = Belief(particles, cells, pose, ellipse, path, tuple(labels), shown)  # type: ignore[arg-type]
     return belief, cut
 
 

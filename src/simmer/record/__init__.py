@@ -1,12 +1,12 @@
 """Keeping runs: a run folder with the manifest, events, trace and report of one run.
 
 See :mod:`simmer.record.runfolder` for the folder, :mod:`simmer.record.eventlog` for
-``events.jsonl`` and :mod:`simmer.record.trace` for ``trace.csv``, and
-:mod:`simmer.record.reader` for reading those two back.
+``events.jsonl``, :mod:`simmer.record.trace` for ``trace.csv``, :mod:`simmer.record.scans`
+for a LiDAR's ``scans.csv``, and :mod:`simmer.record.reader` for reading them back.
 """
 
 from simmer.record.eventlog import EventLog
-from simmer.record.reader import read_events
+from simmer.record.reader import read_events, read_scans
 from simmer.record.runfolder import (
     LoadedRun,
     RunRecorder,
@@ -26,6 +26,7 @@ __all__ = [
     "load_run",
     "read_events",
     "read_manifest",
+    "read_scans",
     "retrace",
     "write_report_md",
 ]

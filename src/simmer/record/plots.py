@@ -35,7 +35,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from pydantic import ValidationError
@@ -48,7 +48,15 @@ from simmer.config.zones import Zones
 from simmer.errors import PlotError, RunFolderError, UnsafeOutput
 from simmer.geometry import FloatArray, Pose
 from simmer.record.page import draw_items, rgb
-from simmer.record.reader import EVENTS, TRACE, event_objects, read_trace
+from simmer.record.reader import (
+    EVENTS,
+    SCANS,
+    TRACE,
+    RecordedScan,
+    event_objects,
+    read_scans,
+    read_trace,
+)
 from simmer.record.safefile import check_target, replacing, write_text
 from simmer.scene import (
     Look,
@@ -72,6 +80,7 @@ from simmer.world.localization import (
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+    from matplotlib.projections.polar import PolarAxes
 
 log = logging.getLogger("simmer.plot")
 
@@ -79,6 +88,15 @@ MANIFEST_FILE = "manifest.json"
 REPORT_FILE = "report.md"
 PATH_IMAGE = "path.png"
 SENSORS_IMAGE = "sensors.png"
+SCANS_IMAGE = "scans.png"
+"""Every scan point of a run with a LiDAR, drawn by every ``simmer plot``."""
+SCAN_IMAGE = "scan.png"
+"""One scan, drawn by ``simmer plot --scan-at T``."""
+SCANS_WORDS = (SCANS_IMAGE, "Every LiDAR scan point over the maze")
+SCAN_WORDS = (SCAN_IMAGE, "One LiDAR scan, over the maze and as read")
+SCAN_RGB: Color = (220, 0, 220)
+SCAN_COLOR = "#" + bytes(SCAN_RGB).hex()
+"""The scan points' colour: the window's (the lidar kind's ``point_color``)."""
 
 COL_TIME, COL_X, COL_Y, COL_HEADING = "time", "x", "y", "heading"
 TRACE_REQUIRED = (COL_TIME, COL_X, COL_Y, COL_HEADING)
@@ -537,26 +555,40 @@ def _position(value: Any) -> tuple[float, float] | None:
 # ----------------------------------------------------------------------------- plotting
 
 
-def plot_run(folder: str | Path, say: Callable[[str], None] = log.warning) -> list[Path]:
-    """Write ``path.png`` and ``sensors.png`` into a run folder and show them in its
-    ``report.md``: written again from ``report.json`` for a recorded run, else linked from a
-    ``report.md`` of some other origin if it does not show them yet; return the files written.
-    A run cut short (killed: no report) is drawn as far as its trace goes, and ``say`` is
-    told where its events and trace end (:func:`cut_short_of`)."""
+def plot_run(
+    folder: str | Path,
+    say: Callable[[str], None] = log.warning,
+    scan_time: float | None = None,
+) -> list[Path]:
+    """Write ``path.png`` and ``sensors.png`` (and ``scans.png``, every scan point, for a
+    robot with a LiDAR; ``scan.png``, the scan that had ended by ``scan_time`` on the run's
+    clock, if given) into a run folder and show them in its ``report.md``: written again
+    from ``report.json`` for a recorded run, else linked from a ``report.md`` of some other
+    origin if it does not show them yet; return the files written. A run cut short (killed:
+    no report) is drawn as far as its trace goes, and ``say`` is told where its events and
+    trace end (:func:`cut_short_of`)."""
     from simmer.record.runfolder import REPORT_JSON, write_report_md
 
     run = read_run(folder)
+    scans = recorded_scans(run)
+    one = None if scan_time is None else scan_at(scans, scan_time)
     if (said := cut_short_of(run.folder, run.trace)) is not None:
         say(said)
     path, sensors, report = (run.folder / name for name in (PATH_IMAGE, SENSORS_IMAGE, REPORT_FILE))
     images = [path, sensors, *([run.folder / LOCALIZATION_IMAGE] if run.estimates else [])]
+    images += [run.folder / SCANS_IMAGE] if scans else []
+    images += [run.folder / SCAN_IMAGE] if one is not None else []
     try:
         for image in (*images, report):  # none is drawn if one cannot be written
             check_target(image)
         write_path_plot(run, path)
         write_sensor_plot(run, sensors)
         if run.estimates:
-            write_localization_plot(run, images[-1])
+            write_localization_plot(run, run.folder / LOCALIZATION_IMAGE)
+        if scans:
+            write_scans_plot(run, scans, run.folder / SCANS_IMAGE)
+        if one is not None:
+            write_scan_plot(run, one, run.folder / SCAN_IMAGE)
     except OSError as exc:  # UnsafeOutput names the file
         raise PlotError(str(exc) if isinstance(exc, UnsafeOutput) else _cannot(exc)) from None
     if (run.folder / REPORT_JSON).is_file():
@@ -565,7 +597,9 @@ def plot_run(folder: str | Path, say: Callable[[str], None] = log.warning) -> li
         except (OSError, ValueError) as exc:
             drawn = " and ".join(image.name for image in images)
             raise PlotError(f"drew {drawn}, but not report.md: {exc}") from None
-    shown = [*IMAGES, LOCALIZATION_WORDS] if run.estimates else IMAGES
+    shown = [*IMAGES, *([LOCALIZATION_WORDS] if run.estimates else [])]
+    shown += [SCANS_WORDS] if scans else []
+    shown += [SCAN_WORDS] if one is not None else []
     try:
         return [*images, report] if link_from_report(report, shown) else images
     except (OSError, ValueError) as exc:
@@ -665,6 +699,122 @@ def write_sensor_plot(run: RecordedRun, target: Path) -> None:
         _save(_sensor_figure(run), target)
 
 
+def recorded_scans(run: RecordedRun) -> list[tuple[float, RecordedScan]]:
+    """The run's LiDAR scans (``scans.csv``), each with its time on the run's clock (the
+    parts of a run with resets one after the other, as sensors.png plots them); [] if it
+    recorded none. PlotError if the file cannot be read."""
+    path = run.folder / SCANS
+    if not path.is_file():
+        return []
+    try:
+        scans = read_scans(path)
+    except RunFolderError as exc:
+        raise PlotError(str(exc)) from None
+    offsets, parts = run.trace.offsets(), run.trace.parts
+    part, timed, seen = 0, [], set[str]()
+    for scan in scans:
+        if scan.number == 1 and scan.device in seen:  # a reset: the scans count from 1 again
+            part, seen = part + 1, set()
+        seen.add(scan.device)
+        timed.append((scan.time + float(offsets[min(part, parts - 1)]), scan))
+    return timed
+
+
+def scan_at(scans: Sequence[tuple[float, RecordedScan]], time: float) -> tuple[float, RecordedScan]:
+    """The latest scan (of the first LiDAR) that ended by ``time`` on the run's clock, with
+    its time on that clock; PlotError if none had."""
+    if not scans:
+        raise PlotError("the run recorded no LiDAR scans (its robot has no lidar device)")
+    first = scans[0][1].device
+    ended = [(at, scan) for at, scan in scans if scan.device == first and at <= time + 1e-9]
+    if not ended:
+        raise PlotError(
+            f"no scan of {first} had ended by {time:g} s (the first ended at {scans[0][0]:g} s)"
+        )
+    return ended[-1]
+
+
+def write_scan_plot(run: RecordedRun, timed: tuple[float, RecordedScan], target: Path) -> None:
+    """Draw one scan (with its time on the run's clock) into ``target``: its points over the
+    maze, the robot where it was when the scan ended, and beside it the distances as the
+    program reads them (a polar plot, 0 degrees at the LiDAR's front, clockwise)."""
+    from matplotlib import style
+    from matplotlib.figure import Figure
+
+    at, scan = timed
+    trace = run.trace
+    times = trace.run_time()
+    pose = (
+        float(np.interp(at, times, trace.x)),
+        float(np.interp(at, times, trace.y)),
+        float(np.interp(at, times, np.degrees(np.unwrap(np.radians(trace.heading))))),
+    )
+    with style.context("default"):
+        maze = Maze.from_settings(run.settings)
+        scale = max(maze.width, maze.height) / PAGE_INCHES
+        width, height = maze.width / scale + 0.8, maze.height / scale + 2.2
+        fig = Figure(figsize=(width + height * 0.6, height), dpi=DPI, layout="constrained")
+        ax = fig.add_subplot(1, 2, 1)
+        handles = _draw_path(ax, run, scale, commands=False)
+        _draw_robot(ax, run.settings, pose, SCAN_RGB)
+        handles.append(_line(SCAN_COLOR, "-", "the robot when the scan ended"))
+        hit = ~np.isnan(scan.x)
+        ax.plot(scan.x[hit], scan.y[hit], "o", ms=3, color=SCAN_COLOR, zorder=9)
+        handles.append(_line(SCAN_COLOR, "o", f"scan {scan.number} of {_shown(scan.device)}"))
+        ax.set_title(
+            f"{_shown(scan.device)}'s scan {scan.number}, ended at {scan.time:.2f} s\n"
+            f"{_title(run)}",
+            fontsize=12,
+        )
+        fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
+        polar = cast("PolarAxes", fig.add_subplot(1, 2, 2, projection="polar"))
+        polar.set_theta_zero_location("N")
+        polar.set_theta_direction(-1)  # clockwise, as the LiDAR's angles go
+        read = scan.distances > 0
+        radians = np.radians(scan.angles)
+        polar.plot(radians[read], scan.distances[read], "o", ms=3, color=SCAN_COLOR)
+        missing = int((~read).sum())
+        polar.set_title(
+            f"As read: distance (in) by angle from the LiDAR's front\n"
+            f"{len(scan.distances)} beams, {missing} with no return (read as 0)",
+            fontsize=11,
+        )
+        _save(fig, target)
+
+
+def write_scans_plot(
+    run: RecordedRun, scans: Sequence[tuple[float, RecordedScan]], target: Path
+) -> None:
+    """Draw every scan point of the run over the maze into ``target``, coloured by time, under
+    the path driven."""
+    from matplotlib import style
+    from matplotlib.figure import Figure
+
+    with style.context("default"):
+        maze = Maze.from_settings(run.settings)
+        scale = max(maze.width, maze.height) / PAGE_INCHES
+        width, height = maze.width / scale + 1.6, maze.height / scale + 2.2
+        fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
+        ax = fig.add_subplot()
+        handles = _draw_path(ax, run, scale, commands=False)
+        times = np.concatenate([np.full(len(scan.x), at) for at, scan in scans])
+        xs = np.concatenate([scan.x for _, scan in scans])
+        ys = np.concatenate([scan.y for _, scan in scans])
+        hit = ~np.isnan(xs)
+        shown = ax.scatter(
+            xs[hit], ys[hit], s=1.5, c=times[hit], cmap="plasma", zorder=3, rasterized=True
+        )
+        fig.colorbar(shown, ax=ax, label="time of the scan (s)", shrink=0.8)
+        devices = sorted({_shown(scan.device) for _, scan in scans})
+        handles.append(_line("#cc4778", "o", f"scan points ({int(hit.sum()):,})"))
+        ax.set_title(
+            f"Every scan point of {', '.join(devices)}: {len(scans):,} scans\n{_title(run)}",
+            fontsize=12,
+        )
+        fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
+        _save(fig, target)
+
+
 def _save(fig: Figure, target: Path) -> None:
     """Write a figure as PNG with the Agg canvas (no pyplot, no window), into a run folder
     safely (:func:`~simmer.record.safefile.replacing`: never through a link at its name)."""
@@ -735,14 +885,25 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     """The path figure: floor, solid cells, walls, block, start, path, commands, collisions."""
     from matplotlib.figure import Figure
 
-    settings, trace = run.settings, run.trace
-    maze = Maze.from_settings(settings)
-    margin = maze.cell * 0.15
+    maze = Maze.from_settings(run.settings)
     scale = max(maze.width, maze.height) / PAGE_INCHES
     width = maze.width / scale + 0.8
     height = maze.height / scale + 2.2
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
+    handles = _draw_path(ax, run, scale)
+    ax.set_title(f"Path of the run in {run.folder.resolve().name}\n{_title(run)}", fontsize=12)
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
+    return fig, ax
+
+
+def _draw_path(ax: Axes, run: RecordedRun, scale: float, commands: bool = True) -> list[Any]:
+    """Draw the maze, block, start, path, end pose, collisions and (with ``commands``) the
+    numbered commands on ``ax``, page-sized by ``scale`` (inches of maze per inch of page);
+    return the legend's entries."""
+    settings, trace = run.settings, run.trace
+    maze = Maze.from_settings(settings)
+    margin = maze.cell * 0.15
     ax.set_facecolor(rgb(settings.background_color))
     zones = Zones.from_settings(settings) if "gripper" in run.kinds.values() else None
     target = run.scenario.target if run.scenario else None
@@ -764,7 +925,8 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     ax.plot(end[0], end[1], "s", ms=7, mfc=PATH_COLOR, mec="black", zorder=6)
     handles += [_line(PATH_COLOR, "-", "path driven"), start]
     handles.append(_line(PATH_COLOR, "s", "end (outline, heading)", mec="black"))
-    handles += _draw_commands(ax, run, scale)
+    if commands:
+        handles += _draw_commands(ax, run, scale)
     if run.collisions:
         points = trace.positions(run.collisions)
         for i, mark in enumerate(run.collisions):
@@ -785,9 +947,7 @@ def _path_figure(run: RecordedRun) -> tuple[Figure, Axes]:
     ax.tick_params(top=True, labeltop=True, labelsize=9)
     ax.set_xlabel("x (inches)")
     ax.set_ylabel("y (inches, down)")
-    ax.set_title(f"Path of the run in {run.folder.resolve().name}\n{_title(run)}", fontsize=12)
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
-    return fig, ax
+    return handles
 
 
 def _draw_block_and_start(

@@ -1,4 +1,4 @@
-"""The one reader of a run folder's recordings: ``events.jsonl`` and ``trace.csv``.
+"""The one reader of a run folder's recordings: ``events.jsonl``, ``trace.csv`` and ``scans.csv``.
 
 Plots, replays and their checks, ``simmer replay --check`` and the tests read these two files
 only here (``tests/repository/test_run_folder_reader.py`` keeps it so), and their names are
@@ -20,12 +20,16 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from simmer.errors import RunFolderError
+from simmer.geometry import FloatArray
 from simmer.options import MAX_RECORDING_BYTES
 from simmer.record.eventlog import event_from_dict
 from simmer.record.tracecheck import STEP, RowKey, TraceRows
@@ -184,3 +188,72 @@ def read_trace_rows(path: str | Path) -> TraceRows:
         previous = step
         rows.append(((part, step), row))
     return TraceRows(header, rows)
+
+
+# ----------------------------------------------------------------------------- the scans
+
+
+SCANS = "scans.csv"
+"""A run folder's LiDAR scans (:mod:`simmer.record.scans`)."""
+
+
+@dataclass(frozen=True)
+class RecordedScan:
+    """One scan of ``scans.csv``: when it ended, its LiDAR and number, and per beam the
+    distance (inches, 0: no return) and where it met something (world inches, NaN: none)."""
+
+    time: float
+    step: int
+    device: str
+    number: int
+    distances: FloatArray
+    x: FloatArray
+    y: FloatArray
+
+    @property
+    def angles(self) -> FloatArray:
+        """Each beam's angle, degrees clockwise from the LiDAR's front."""
+        beams = len(self.distances)
+        return np.arange(beams, dtype=np.float64) * np.float64(360.0 / beams)
+
+
+def read_scans(path: str | Path) -> list[RecordedScan]:
+    """Every whole scan of a ``scans.csv``, in order (its last line left out if cut before
+    its newline). :class:`RunFolderError` naming the file (and line) if it cannot be read, is
+    larger than :data:`~simmer.record.scans.MAX_SCAN_BYTES` allows, or a row is not a scan."""
+    from simmer.record.scans import MAX_SCAN_BYTES, SCAN_COLUMNS
+
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_SCAN_BYTES:
+            raise RunFolderError(
+                f"{path} is {size:,} bytes, more than a recording's scans hold "
+                f"({MAX_SCAN_BYTES:,}, MAX_SCAN_BYTES)"
+            )
+        text = path.read_text(encoding="ascii")
+    except (OSError, UnicodeError) as exc:
+        raise RunFolderError(f"cannot read {path}: {exc}") from None
+    lines = text.split("\n")[:-1]  # a last line without its newline is cut short: left out
+    if not lines or lines[0] != ",".join(SCAN_COLUMNS):
+        raise RunFolderError(
+            f"{path} line 1: not a scans file's header (expected {','.join(SCAN_COLUMNS)})"
+        )
+    return [_scan(path, number, line) for number, line in enumerate(lines[1:], 2)]
+
+
+def _scan(path: Path, number: int, line: str) -> RecordedScan:
+    """The scan of line ``number``; RunFolderError naming the line if it is not one."""
+    cells = line.split(",")
+    try:
+        if len(cells) != 7:
+            raise ValueError(f"{len(cells)} cells, not 7")
+        time, step, device, scan = float(cells[0]), int(cells[1]), cells[2], int(cells[3])
+        beams = [np.array(cell.split(), dtype=np.float64) for cell in cells[4:]]
+        if not beams[0].size or any(b.shape != beams[0].shape for b in beams):
+            raise ValueError("its distances, x and y do not have one number per beam each")
+        if not math.isfinite(time) or step < 0 or not device.isidentifier():
+            raise ValueError("its time, step or device is not one")
+    except ValueError as exc:
+        raise RunFolderError(f"{path} line {number}: not a scan: {exc}") from None
+    return RecordedScan(time, step, device, scan, *beams)

@@ -8,7 +8,8 @@
   :func:`load_run` rebuilds the configuration from it;
 - ``events.jsonl``, every event as it happens (:mod:`simmer.record.eventlog`);
 - ``trace.csv``, the true pose and the sensors' last readings (:mod:`simmer.record.trace`);
-  these two are read back only by :mod:`simmer.record.reader`;
+- ``scans.csv``, when the robot has a LiDAR: every whole scan (:mod:`simmer.record.scans`);
+  these three are read back only by :mod:`simmer.record.reader`;
 - ``report.json`` and ``report.md``, written when the run ends: its outcome (the Task 2 time,
   collisions, path length, commands, NaN replies, final pose) and its facts (seed, length, how
   it ended); ``report.md`` is in plain words for a lab report and shows ``path.png`` and
@@ -47,13 +48,14 @@ from simmer.errors import UntrustedRun
 from simmer.geometry import Pose, wrap_degrees
 from simmer.options import MAX_RECORDING_BYTES, RunOptions
 from simmer.record.eventlog import EventLog, RecordingBudget, stop_reason
-from simmer.record.reader import EVENTS, TRACE, read_events
+from simmer.record.reader import EVENTS, SCANS, TRACE, read_events
 from simmer.record.safefile import check_target, write_text
+from simmer.record.scans import ScanWriter, lidar_ids
 from simmer.record.trace import TRACE_RATE, TraceWriter, trace_columns
 from simmer.untrusted import parse_json, read_at_most
 from simmer.world.events import Event
 from simmer.world.outcome import Outcome
-from simmer.world.replay import Replayed, replay
+from simmer.world.replay import Replayed, feed
 from simmer.world.simulation import Simulation
 
 FORMAT = 1
@@ -65,6 +67,8 @@ PLOTS = (
     ("path.png", "The robot's true path"),
     ("sensors.png", "Sensor readings against time"),
     ("localization.png", "The program's estimate against the truth"),
+    ("scans.png", "Every LiDAR scan point over the maze"),
+    ("scan.png", "One LiDAR scan, over the maze and as read"),
 )
 """The pictures ``simmer plot DIR`` draws, which report.md shows when they exist."""
 MAX_JSON_BYTES = 16_000_000
@@ -117,7 +121,7 @@ def prepare_folder(folder: str | Path) -> Path:
         raise FileExistsError(
             f"{folder} already holds a recorded run; record into a new folder, or delete it"
         )
-    for name in (MANIFEST, EVENTS, TRACE, REPORT_JSON, REPORT_MD):
+    for name in (MANIFEST, EVENTS, TRACE, SCANS, REPORT_JSON, REPORT_MD):
         check_target(folder / name)
     return folder
 
@@ -396,16 +400,24 @@ def start_pose(config: SimConfig, seed: int) -> Pose:
     return Simulation(config, seed=seed).scenario.start
 
 
-def retrace(folder: str | Path, path: str | Path) -> Replayed:
-    """Replay a recorded run and write its trace to ``path``: to compare it with the recorded
-    ``trace.csv``, or to write one that ``kill -9`` cut short."""
+def retrace(folder: str | Path, path: str | Path, scans: str | Path | None = None) -> Replayed:
+    """Replay a recorded run and write its trace to ``path`` (and its LiDARs' scans to
+    ``scans``, if given and it has a LiDAR): to compare them with the recorded ``trace.csv``
+    and ``scans.csv``, or to write ones that ``kill -9`` cut short."""
     config, seed, events = load_run(folder)
     writer = TraceWriter(path, sensor_ids(config), config.settings.frame_rate)
     writer.begin(0.0, 0, start_pose(config, seed))
+    sim = Simulation(config, seed=seed)
+    scan_writer = ScanWriter(scans, sim) if scans is not None and lidar_ids(sim) else None
+    for observer in (writer, scan_writer):
+        if observer is not None:
+            sim.add_observer(observer)
     try:
-        return replay(config, seed, events, [writer])
+        return feed(sim, events)
     finally:
         writer.close()
+        if scan_writer is not None:
+            scan_writer.close()
 
 
 # ----------------------------------------------------------------------------- report
@@ -656,8 +668,12 @@ class RunRecorder:
             self.folder / TRACE, sensor_ids(sim.config), settings.frame_rate, budget, self._stop
         )
         self.trace.begin(sim.time, sim.steps, sim.robot.pose)
+        self.scans = ScanWriter(self.folder / SCANS, sim) if lidar_ids(sim) else None
+        """The LiDARs' scans (:mod:`simmer.record.scans`), if the robot has a LiDAR."""
         sim.add_observer(self.events)
         sim.add_observer(self.trace)
+        if self.scans is not None:
+            sim.add_observer(self.scans)
         self.closed = False
 
     def _stop(self, reason: str) -> None:
@@ -679,6 +695,9 @@ class RunRecorder:
         sim = self.sim
         sim.remove_observer(self.events)
         sim.remove_observer(self.trace)
+        if self.scans is not None:
+            sim.remove_observer(self.scans)
+            self.scans.close()
         if self._own_outcome:
             sim.remove_observer(self.outcome)
         self.events.close()
@@ -696,6 +715,8 @@ class RunRecorder:
             "resets": self.trace.resets,
             "events": self.events.written,
             "trace_rows": self.trace.rows,
+            **({} if self.scans is None else {"scans": self.scans.scans}),
+            **({} if self.scans is None else {"scans_stopped": self.scans.stopped}),
             "recording_stopped": self.stopped,
             "outcome": self.outcome.report().as_dict(),
         }

@@ -1,5 +1,5 @@
 """The program's belief drawn over the maze (``robot.show``): particles, cell probabilities,
-the pose estimate with its uncertainty ellipse, a planned path and labels, in purple, under
+the pose estimate with its uncertainty ellipse, a planned path, points and labels, under
 the true robot. The window toggles it with B; videos and replays draw it too."""
 
 from __future__ import annotations
@@ -18,6 +18,9 @@ BELIEF_COLOR: Color = (140, 40, 200)
 ESTIMATE_COLOR: Color = (230, 0, 140)
 """The pose estimate and its ellipse: magenta, over the purple cloud."""
 PATH_COLOR: Color = (40, 90, 220)
+POINTS_COLOR: Color = (0, 150, 150)
+"""World points the program shows (a scan it placed, its map): teal, unlike the LiDAR's own
+magenta points, so where the program believes the walls are and where they are both show."""
 LABEL_BACK: Color = (250, 248, 255)
 """A label's box: a label is usually where the cloud is thickest, where purple on purple
 could not be read."""
@@ -42,6 +45,10 @@ def paint_belief(r: Renderer, view: View, belief: Belief, size: tuple[float, flo
         r.draw_lines(
             view.points(belief.path.astype(np.float64)), PATH_COLOR, max(1, round(view.ppi / 8))
         )
+    if len(belief.points):
+        dot = max(1.5, view.ppi * 0.3)
+        for point in view.points(belief.points.astype(np.float64)):
+            r.draw_circle(point, dot, POINTS_COLOR, 0)
     particles = belief.particles
     if len(particles):
         ppi, ox, oy = view.ppi, view.ox, view.oy
