@@ -17,10 +17,10 @@ from helpers import REPO
 SRC = REPO / "src" / "simmer"
 
 LAYERS = [
+    {"errors"},
     {
         "pose",
         "ports",
-        "errors",
         "ending",
         "protocol",
         "proctree",
