@@ -112,28 +112,19 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
         window."""
         if self.render_mode is None:
             return None
-        import pygame
+        from simmer.ui.frames import FrameWindow, frame_pixels
 
-        from simmer.ui.window import render_scene
-
-        surface = render_scene(self.sim)
         if self.render_mode == "rgb_array":
-            return np.transpose(pygame.surfarray.array3d(surface), (1, 0, 2))
+            return frame_pixels(self.sim)
         if self._window is None:
-            pygame.display.init()
-            self._window = pygame.display.set_mode(surface.get_size())
-            pygame.display.set_caption("SimMeR gym")
-        pygame.event.pump()
-        self._window.blit(surface, (0, 0))
-        pygame.display.flip()
+            self._window = FrameWindow()
+        self._window.show(self.sim)
         return None
 
     def close(self) -> None:
         """Close the window, if one is open."""
         if self._window is not None:
-            import pygame
-
-            pygame.display.quit()
+            self._window.close()
             self._window = None
 
     def __getstate__(self) -> dict[str, Any]:

@@ -413,15 +413,16 @@ def _scenario(value: Any) -> RecordedScenario | None:
 
 def _handled(folder: Path) -> Handled | None:
     """A project run's pickup and delivery as its ``report.json`` has them; None if it has
-    none (no report, another kind of run, or no pickup). RunFolderError if it cannot be read."""
+    none (no report, another kind of run, or no pickup) or cannot be read: the plots are drawn
+    without the marks, and writing report.md says in one line what is wrong with it."""
     from simmer.record.runfolder import REPORT_JSON, read_json
 
     if not (folder / REPORT_JSON).is_file():
         return None
     try:
         outcome = read_json(folder / REPORT_JSON).get("outcome")
-    except ValueError as exc:
-        raise PlotError(str(exc)) from None
+    except ValueError:
+        return None
     if not isinstance(outcome, dict):
         return None
     picked = _float(outcome.get("picked_up_at"))
