@@ -98,6 +98,14 @@ def stop_reason(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
 
+def write_all(write: Callable[[bytes], int | None], data: bytes) -> None:
+    """Write all of ``data`` with ``write`` (an unbuffered file's, which may write part of
+    it), in one system call unless the system writes less; OSError as the file raises it."""
+    done = write(data) or 0
+    while done < len(data):
+        done += write(data[done:]) or 0
+
+
 # ----------------------------------------------------------------------------- writing
 
 
@@ -259,9 +267,7 @@ class EventLog:
             self.stop(self._budget.why())
             return
         try:
-            done = self._send(line) or 0
-            while done < len(line):
-                done += self._send(line[done:]) or 0
+            write_all(self._send, line)
         except OSError as exc:
             self.stop(stop_reason(exc))
             return

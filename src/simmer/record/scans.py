@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from simmer.devices.lidar import Lidar
-from simmer.record.eventlog import stop_reason
+from simmer.record.eventlog import stop_reason, write_all
 from simmer.world.events import Event, ResetEvent, StepEvent
 from simmer.world.simulation import Simulation
 
@@ -114,9 +114,7 @@ class ScanWriter:
             )
             return
         try:
-            done = self._file.write(data) or 0
-            while done < len(data):
-                done += self._file.write(data[done:]) or 0
+            write_all(self._file.write, data)
         except OSError as exc:
             self.stop(stop_reason(exc))
             return

@@ -36,7 +36,7 @@ from pathlib import Path
 
 from simmer.geometry import Pose
 from simmer.protocol import command_ids, parse_command
-from simmer.record.eventlog import RecordingBudget, stop_reason
+from simmer.record.eventlog import RecordingBudget, stop_reason, write_all
 from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
 
 TRACE_RATE = 30.0
@@ -197,9 +197,7 @@ class TraceWriter:
             self.stop(self._budget.why())
             return
         try:
-            done = self._file.write(data) or 0
-            while done < len(data):
-                done += self._file.write(data[done:]) or 0
+            write_all(self._file.write, data)
         except OSError as exc:
             self.stop(stop_reason(exc))
             return
