@@ -134,7 +134,7 @@ def test_a_program_started_by_hand_reads_it_in_real_time(tmp_path: Path) -> None
     sim.command("r0-3600")
     scans = capture(sim)
     lines: list[str] = []
-    options = RunOptions.free_ports(lidar_serial=True, speed=1.0, seconds=20.0)
+    options = RunOptions.free_ports(lidar_serial=True, speed=1.0, seconds=8.0)
     thread = threading.Thread(target=serve, args=(sim, options), kwargs={"echo": lines.append})
     thread.start()
     try:

@@ -245,15 +245,20 @@ def _course(
     top = (rows - 2) * draws.below(2)
     left = (cols - 2) * draws.below(2)
     loading = tuple((top + dr, left + dc) for dr in (0, 1) for dc in (0, 1))
-    for r, c in loading:
+    # ``opened`` again as lists with a solid border: neighbour counts without NumPy's
+    # per-element cost (the generator's hottest line).
+    bordered = [[False] * (cols + 2) for _ in range(rows + 2)]
+
+    def open_cell(r: int, c: int) -> None:
         opened[r, c] = True
+        bordered[r + 1][c + 1] = True
 
     def open_near(r: int, c: int) -> int:
-        return sum(
-            1
-            for nr, nc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
-            if 0 <= nr < rows and 0 <= nc < cols and opened[nr, nc]
-        )
+        above, here, below = bordered[r], bordered[r + 1], bordered[r + 2]
+        return above[c + 1] + below[c + 1] + here[c] + here[c + 2]
+
+    for r, c in loading:
+        open_cell(r, c)
 
     def neighbours(r: int, c: int) -> list[Cell]:
         return [
@@ -277,7 +282,7 @@ def _course(
         listed.discard((r, c))
         if open_near(r, c) != 1:
             continue
-        opened[r, c] = True
+        open_cell(r, c)
         for near in neighbours(r, c):
             if not opened[near] and near not in listed and open_near(*near) == 1:
                 frontier.append(near)
@@ -298,7 +303,7 @@ def _course(
             continue
         if (loops + k - 1) / (n + 1) > s.loops[1]:
             continue
-        opened[r, c] = True
+        open_cell(r, c)
         n, loops = n + 1, loops + k - 1
 
     # Drop-off zones: dead ends first, then any open cell, apart from each other.
