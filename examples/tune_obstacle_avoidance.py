@@ -25,9 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from simmer import load_config, with_overrides
 from simmer.batch import Batch
-from simmer.config import load_config
-from simmer.config.overrides import with_overrides
 
 HERE = Path(__file__).resolve().parent
 NOISE = {

@@ -25,6 +25,7 @@ _LAZY = {
     "SimmerError": "simmer.errors",
     "SimConfig": "simmer.config",
     "load_config": "simmer.config",
+    "with_overrides": "simmer.config",
     "Device": "simmer.devices",
     "DeviceParams": "simmer.devices",
     "register_device_kind": "simmer.devices",
@@ -34,7 +35,7 @@ _LAZY = {
 }
 
 if TYPE_CHECKING:
-    from simmer.config import SimConfig, load_config
+    from simmer.config import SimConfig, load_config, with_overrides
     from simmer.devices import Device, DeviceParams, register_device_kind
     from simmer.errors import ConfigError, SimmerError
     from simmer.pose import Pose
@@ -56,4 +57,5 @@ __all__ = [
     "load_config",
     "register_device_kind",
     "replay",
+    "with_overrides",
 ]

@@ -56,7 +56,7 @@ INTERNAL = (
 """The modules and packages (with everything in them) that are internal: they may change."""
 
 FROM_INTERNAL = {
-    "simmer": ("SimConfig", "Simulation", "load_config", "replay"),
+    "simmer": ("SimConfig", "Simulation", "load_config", "replay", "with_overrides"),
     "simmer.devices": ("heading_vector",),
     "simmer.sweep": ("apply_overrides",),
 }

@@ -30,6 +30,7 @@ EXPORTED = {
         "load_config",
         "register_device_kind",
         "replay",
+        "with_overrides",
     ],
     "simmer.client": [
         "Address",

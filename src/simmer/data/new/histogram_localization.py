@@ -24,9 +24,8 @@ import math
 
 import numpy as np
 
-from simmer import Simulation
+from simmer import Simulation, with_overrides
 from simmer.client import Client, connect
-from simmer.config import with_overrides
 
 HEADINGS = (0.0, 90.0, 180.0, 270.0)
 """Degrees from +y: facing +y, -x, -y, +x."""
