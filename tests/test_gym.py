@@ -57,12 +57,18 @@ def test_the_same_seed_gives_the_same_trajectory(env_id: str) -> None:
         assert not all(np.array_equal(a[0], b[0]) for a, b in zip(first, other, strict=False))
 
 
-def test_an_environment_pickles_and_goes_on_as_before() -> None:
-    env = gym.make("SimMeR/Lab1-v0")
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [("SimMeR/Lab1-v0", {}), ("SimMeR/Project-v0", {"success": "score > 20"})],
+)
+def test_an_environment_pickles_and_goes_on_as_before(env_id: str, kwargs: dict) -> None:
+    """The copy goes on identically (the project's with its run outcome, which the reward
+    and the success condition read)."""
+    env = gym.make(env_id, **kwargs)
     env.reset(seed=3)
     env.step(0)
     copy = pickle.loads(pickle.dumps(env))
-    for action in (0, 2, 0, 3):
+    for action in (0, 2, 0, 3, 1, 0):
         a = env.step(action)
         b = copy.step(action)
         np.testing.assert_array_equal(a[0], b[0])
