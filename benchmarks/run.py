@@ -24,6 +24,7 @@ SUITES = [
     "bench_lidar",
     "bench_mazes",
     "bench_batch",
+    "bench_particle_filter",
     "bench_single",
     "bench_sensors",
     "bench_grade",

@@ -3,14 +3,17 @@
 The robot does not know where it starts. 4,000 particles are spread over the open floor; the
 robot drives cell by cell (forward when the way ahead is clear, else a quarter turn), and after
 each move every particle is moved by the same command under the drive's noise
-(:meth:`simmer.batch.Model.move`: the simulator's own drive, bias and walls) and weighed by how
-well the four ultrasonic readings match what its sensors would read there
-(:meth:`simmer.batch.Model.expected`: the simulator's own ray casting), then resampled. The
-cloud and its mean are drawn over the maze with ``robot.show``, and the mean is reported as the
-pose estimate (``robot.report_pose``), so the run's outcome says when it localized.
+(:meth:`simmer.batch.Model.move`: the simulator's own drive, bias and walls, for all particles
+in one compiled call) and weighed by how well the four ultrasonic readings match what its
+sensors would read there (:meth:`simmer.batch.Model.expected`: the simulator's own ray
+casting), then resampled. The cloud and its mean are drawn over the maze with ``robot.show``
+(B in the window hides them), and the mean is reported as the pose estimate
+(``robot.report_pose``), so the run's outcome says when it localized. docs/gym.md gives how
+fast it converges.
 
-    simmer run examples/lab1_rover.toml \
-        --program "python examples/particle_filter.py examples/lab1_rover.toml"
+From a folder ``simmer new --localization`` made (in examples/, the rover is lab1_rover.toml)::
+
+    simmer run my_rover.toml --start 1,6,90 --program "python particle_filter.py my_rover.toml"
 
 Pass the configuration the simulator runs, so the model is the same robot's.
 """

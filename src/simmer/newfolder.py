@@ -23,7 +23,7 @@ LAB_PAGE = "docs/lab1.md"
 PARTS: dict[str, tuple[str, ...]] = {
     "project": ("project.toml", "project_delivery.py", "sweep_project.toml",
                 "sweep_project_starts.toml"),
-    "localization": ("histogram_localization.py", "dead_reckoning_particles.py",
+    "localization": ("histogram_localization.py", "particle_filter.py",
                      "sweep_localization.toml", "project.toml"),
 }  # fmt: skip
 """The template's files each page beyond Lab 1 adds (``simmer new --project``,

@@ -150,6 +150,8 @@ EXPORTED = {
         "LAB_NOISE",
         "MazeEnv",
         "MazeVectorEnv",
+        "PROJECT_MOVES",
+        "ProjectEnv",
         "register_environments",
     ],
 }

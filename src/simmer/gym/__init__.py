@@ -3,7 +3,8 @@
 ``import simmer.gym`` registers ``SimMeR/Maze-v0`` (the default configuration) and
 ``SimMeR/Lab1-v0`` (the lab rover with the lab's noise on its sensors and drives), each with
 a single environment (:class:`MazeEnv`, over a :class:`~simmer.Simulation`) and a vector one
-(:class:`MazeVectorEnv`, over a :class:`~simmer.batch.Batch`)::
+(:class:`MazeVectorEnv`, over a :class:`~simmer.batch.Batch`), and ``SimMeR/Project-v0``
+(the course project's task, :class:`ProjectEnv`: single environments only)::
 
     import gymnasium as gym
     import simmer.gym
@@ -19,6 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 from simmer.gym.env import MazeEnv
+from simmer.gym.project import PROJECT_MOVES, ProjectEnv
 from simmer.gym.task import DISCRETE_MOVES
 from simmer.gym.vector import MazeVectorEnv
 
@@ -26,8 +28,10 @@ __all__ = [
     "DISCRETE_MOVES",
     "ENVIRONMENTS",
     "LAB_NOISE",
+    "PROJECT_MOVES",
     "MazeEnv",
     "MazeVectorEnv",
+    "ProjectEnv",
     "register_environments",
 ]
 
@@ -44,8 +48,13 @@ ultrasonic sensors and both drives."""
 ENVIRONMENTS: dict[str, dict[str, Any]] = {
     "SimMeR/Maze-v0": {},
     "SimMeR/Lab1-v0": {"overrides": LAB_NOISE},
+    "SimMeR/Project-v0": {},
 }
 """The registered environment ids and the keyword arguments each is made with."""
+_ENTRY_POINTS: dict[str, tuple[str, str | None]] = {
+    "SimMeR/Project-v0": ("simmer.gym.project:ProjectEnv", None),
+}
+"""Ids not made by :class:`MazeEnv` (and :class:`MazeVectorEnv`): their entry points."""
 
 
 def register_environments() -> None:
@@ -55,12 +64,10 @@ def register_environments() -> None:
     for env_id, kwargs in ENVIRONMENTS.items():
         if env_id in registry:
             continue
-        register(
-            id=env_id,
-            entry_point="simmer.gym.env:MazeEnv",
-            vector_entry_point="simmer.gym.vector:MazeVectorEnv",
-            kwargs=kwargs,
+        entry, vector = _ENTRY_POINTS.get(
+            env_id, ("simmer.gym.env:MazeEnv", "simmer.gym.vector:MazeVectorEnv")
         )
+        register(id=env_id, entry_point=entry, vector_entry_point=vector, kwargs=kwargs)
 
 
 register_environments()

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium
 import numpy as np
 
 from simmer.config.models import SimConfig
 from simmer.gym.task import Actions, Task
+from simmer.world.outcome import Outcome
 from simmer.world.simulation import Simulation
 
 SEED_RANGE = 2**63
@@ -23,12 +24,17 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
     ``pose=True`` the true pose), actions drive commands, the reward is reaching the block
     (``reach_reward``) less ``collision_penalty`` per collision and ``step_penalty`` per step;
     an episode ends on reaching the block or after ``max_steps`` actions (truncated).
+    With ``success`` (a condition over the run's outcome, as ``simmer sweep``'s ``success``)
+    the reward is 1 on the step it becomes true, which ends the episode, and 0 otherwise.
 
     ``config``: a configuration file, a :class:`~simmer.SimConfig` or None (the built-in
     default). See docs/gym.md for every option.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}  # noqa: RUF012
+    keeps_outcome: ClassVar[bool] = False
+    """Whether the run's :class:`~simmer.world.outcome.Outcome` follows every episode (it does
+    whenever ``success`` is given)."""
 
     def __init__(
         self,
@@ -44,8 +50,14 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
         reach_reward: float = 10.0,
         collision_penalty: float = 1.0,
         step_penalty: float = 0.01,
+        success: str | None = None,
         render_mode: str | None = None,
     ) -> None:
+        if success is not None:
+            from simmer.sweep.success import success_condition
+
+            success_condition(success)  # a bad condition: SweepError naming what to fix
+        self.success = success
         self.task = Task.of(
             config,
             overrides=overrides,
@@ -65,6 +77,9 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
         self.observation_space = self.task.observation_space()
         self.action_space = self.task.action_space()
         self.sim = Simulation(self.task.config, seed=0)
+        self.outcome = (
+            Outcome.attach(self.sim) if self.keeps_outcome or success is not None else None
+        )
         self._steps = 0
         self._window: Any = None
 
@@ -92,20 +107,42 @@ class MazeEnv(gymnasium.Env[np.ndarray, Any]):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Execute the action's drive commands, each followed by the frames it needs."""
+        before = self.sim.collisions
+        self._act(action)
+        self._steps += 1
+        reward, terminated, time_up = self._judge(before)
+        if self.success is not None:
+            terminated = self._succeeded()
+            reward = 1.0 if terminated else 0.0
+        truncated = not terminated and (time_up or self._steps >= self.task.max_steps)
+        if self.render_mode == "human":
+            self.render()
+        return self._observe(), reward, terminated, truncated, self._info()
+
+    def _act(self, action: Any) -> None:
+        """Run the action's drive commands, each followed by the frames it takes."""
         sim = self.sim
-        before = sim.collisions
         for drive, amount, frames in self.task.moves(action):
             sim.command(f"{drive}-{amount!r}")
             sim.step(frames)
-        self._steps += 1
+
+    def _judge(self, before: int) -> tuple[float, bool, bool]:
+        """The step's reward, whether the task is done, and whether time is up (never: only
+        ``max_steps`` truncates this task); ``before``: the collisions before the step."""
+        sim = self.sim
         pose = np.array(sim.robot.pose)
         block = np.array([[sim.block.x, sim.block.y]])
         reached = bool(self.task.reached(pose, block)[0])
-        reward = float(self.task.reward(reached, sim.collisions - before))
-        truncated = self._steps >= self.task.max_steps and not reached
-        if self.render_mode == "human":
-            self.render()
-        return self._observe(), reward, reached, truncated, self._info()
+        return float(self.task.reward(reached, sim.collisions - before)), reached, False
+
+    def _succeeded(self) -> bool:
+        """Whether the success condition holds over the run's outcome so far (the evaluator
+        ``simmer sweep`` uses, over the same fields)."""
+        from simmer.sweep.success import flat_outcome, success_condition
+
+        assert self.outcome is not None
+        assert self.success is not None
+        return success_condition(self.success)(flat_outcome(self.outcome.report().as_dict()))
 
     def render(self) -> np.ndarray | None:
         """``rgb_array``: the off-screen renderer's frame (H, W, 3); ``human``: show it in a

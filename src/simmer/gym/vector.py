@@ -13,7 +13,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from simmer.batch import Batch
+from simmer.batch import Batch, BatchError
 from simmer.config.models import SimConfig
 from simmer.gym.env import SEED_RANGE
 from simmer.gym.task import Actions, Task
@@ -40,8 +40,14 @@ class MazeVectorEnv(VectorEnv[np.ndarray, Any, np.ndarray]):
         reach_reward: float = 10.0,
         collision_penalty: float = 1.0,
         step_penalty: float = 0.01,
+        success: str | None = None,
         render_mode: str | None = None,
     ) -> None:
+        if success is not None:
+            raise BatchError(
+                "success= needs a run's outcome, which a batch does not keep: use the single "
+                'environment (gym.make_vec(..., vectorization_mode="sync") steps single ones)'
+            )
         if render_mode is not None:
             raise ValueError("the vector environment does not render; use SimMeR/Maze-v0")
         self.task = task = Task.of(
