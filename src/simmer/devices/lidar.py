@@ -147,6 +147,7 @@ class Lidar(Device):
         self._normals = self._noise[rows] if rows.start < rows.stop else None
         """The rows of ``_noise`` drawn as standard normals, in one call (the stream's order
         as drawing each row alone)."""
+        self._uniforms = self._noise[2] if params.dropout else None
         self._offsets = self.period * (np.arange(n) / n)
         """When each beam is measured after its revolution starts, seconds."""
         self._limits = np.array(
@@ -177,15 +178,16 @@ class Lidar(Device):
 
     # -- stepping ------------------------------------------------------------------------
 
-    def _record(self, world: World) -> None:
+    def _record(self, world: World) -> float:
         """Keep the robot's pose now (its heading unwrapped from the last one's), and the
-        first scan (at the start pose) if none is made yet. Called every step: kept lean."""
+        first scan (at the start pose) if none is made yet; the time now. Called every step:
+        kept lean (a step without a scan costs the LiDAR a few tenths of a microsecond)."""
         now = world.time
         times = self._times
         if not times:
             self._first(world)
         if now <= times[-1]:
-            return
+            return now
         pose = world.robot.pose
         heading = pose.heading
         poses = self._poses
@@ -196,6 +198,7 @@ class Lidar(Device):
         else:
             poses += (pose.x, pose.y, heading + 360.0 * round((last - heading) / 360.0))
         self._heading = heading
+        return now
 
     def _first(self, world: World) -> None:
         """The first pose recorded and the scan the spinning LiDAR made there before the run
@@ -208,10 +211,10 @@ class Lidar(Device):
 
     def update(self, world: World) -> None:
         """Record this step's pose; cast every scan whose revolution has ended."""
-        self._record(world)
-        if world.time < self._due:
+        now = self._record(world)
+        if now < self._due:
             return
-        while world.time >= self._due:
+        while now >= self._due:
             self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
         # drop the poses before the revolution under way (the one before it stays)
         keep = bisect.bisect_right(self._times, self.scan_time) - 1
@@ -223,8 +226,8 @@ class Lidar(Device):
         noise = self._noise
         if self._normals is not None:
             self.rng.standard_normal(out=self._normals)
-        if self.settings.dropout:
-            self.rng.random(out=noise[2])
+        if self._uniforms is not None:
+            self.rng.random(out=self._uniforms)
         maze = world.maze
         scan_revolution(
             maze.hwall,
