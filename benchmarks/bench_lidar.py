@@ -1,16 +1,17 @@
 """LiDAR benchmark: one 360-beam scan's cost, a rover's steps per second with a LiDAR beside
 the same rover without one, and the lab maze's LiDAR table at 1 in.
 
-Run ``python benchmarks/bench_lidar.py`` (or ``python benchmarks/run.py``). Figures are
-wall-clock on this machine, each the best of several repeats after a warm-up that compiles (or
-loads from cache) the Numba kernels; the steps ratio is measured by CPU time too, the two
-rovers in turn, as a loaded machine makes the wall-clock ratio swing.
+Run ``python benchmarks/bench_lidar.py`` (or ``python benchmarks/run.py``). A shared machine's
+load makes wall-clock figures swing by two or more, so the scan and step figures are CPU time
+(``time.process_time``), each the median of REPEATS rounds taken in turns (the rovers one after
+the other in each round, so each sees the same load), after a warm-up that compiles (or loads
+from cache) the Numba kernels. The table is wall-clock, as a user waits for it.
 """
 
 from __future__ import annotations
 
 import copy
-import math
+import statistics
 import time
 import tomllib
 from collections.abc import Callable
@@ -21,12 +22,17 @@ from simmer import Simulation
 from simmer.config import config_from_dict
 from simmer.devices import Lidar
 
-REPEATS = 5
+REPEATS = 7
 TARGETS = {
     "scan_us": 30.0,  # stretch 10
     "steps_ratio": 0.9,
     "table_s": 2.0,
 }
+QUIET = {"range_error": 0, "range_error_proportional": 0, "angular_jitter": 0, "dropout": 0}
+"""A LiDAR's settings with every noise off."""
+NEVER = {"scan_rate": 0.001}
+"""A LiDAR whose first revolution ends after 1,000 s: in a benchmark's run it records the
+robot's pose each step and never scans."""
 
 
 def rover(lidar: bool, settings: dict[str, Any] | None = None) -> Simulation:
@@ -39,79 +45,71 @@ def rover(lidar: bool, settings: dict[str, Any] | None = None) -> Simulation:
     return Simulation(config_from_dict(data, "<bench>", None))
 
 
-def best(
-    run: Callable[[], None], count: int, clock: Callable[[], float] = time.perf_counter
-) -> float:
-    """The shortest time of REPEATS runs of ``run`` called ``count`` times, per call, by
-    ``clock`` (wall-clock; ``time.process_time``: CPU time)."""
-    times = []
-    for _ in range(REPEATS):
-        start = clock()
-        for _ in range(count):
-            run()
-        times.append((clock() - start) / count)
-    return min(times)
+def in_turns(runs: dict[str, Callable[[], object]], count: int) -> dict[str, float]:
+    """CPU seconds per call of each of ``runs`` called ``count`` times: the median of REPEATS
+    rounds, each round running every one in turn (one warm-up round first)."""
+    times: dict[str, list[float]] = {name: [] for name in runs}
+    for round_ in range(REPEATS + 1):
+        for name, run in runs.items():
+            start = time.process_time()
+            for _ in range(count):
+                run()
+            if round_:
+                times[name].append((time.process_time() - start) / count)
+    return {name: statistics.median(values) for name, values in times.items()}
 
 
-def scan_microseconds(quiet: bool, clock: Callable[[], float] = time.perf_counter) -> float:
-    """One whole 360-beam scan as the device makes it at the rover's start: the poses, the
-    beams cast, and (unless ``quiet``) the noise drawn and applied; by ``clock``."""
-    extra = {"range_error": 0, "range_error_proportional": 0, "angular_jitter": 0, "dropout": 0}
-    sim = rover(True, extra if quiet else {})
-    device = sim.robot.devices["l0"]
-    assert isinstance(device, Lidar)
-    sim.step()
-    return best(lambda: device._scan(sim, sim.time, skew=True), 2000, clock) * 1e6
+def scan_runs() -> dict[str, Callable[[], object]]:
+    """One whole 360-beam scan as the device makes it at the rover's start (the poses, the
+    beams cast, the noise applied): noise off, and with the A1M8's noise drawn; the noise
+    draws alone; one ray of the rover's front ultrasonic fan (7 rays a read, the Python call
+    included), for comparison: the LiDAR's beams walk the same grid."""
+    runs: dict[str, Callable[[], object]] = {}
+    for name, settings in (("quiet", QUIET), ("noisy", {})):
+        sim = rover(True, settings)
+        device = sim.robot.devices["l0"]
+        assert isinstance(device, Lidar)
+        sim.step()
+        runs[name] = lambda d=device, s=sim: d._scan(s, s.time, skew=True)
+    noisy = rover(True).robot.devices["l0"]
+    assert isinstance(noisy, Lidar)
+    assert noisy._normals is not None
+    assert noisy._uniforms is not None
+    normals, uniforms, rng = noisy._normals, noisy._uniforms, noisy.rng
+    runs["draws"] = lambda: (rng.standard_normal(out=normals), rng.random(out=uniforms))
+    plain = rover(False)
+    ultrasonic = plain.robot.devices["u0"]
+    runs["ray"] = lambda: ultrasonic.simulate(0.0, plain)
+    return runs
 
 
-def ultrasonic_ray_nanoseconds() -> float:
-    """One ray of the rover's front ultrasonic fan (7 rays, a read), for comparison: the
-    LiDAR's beams walk the same grid, so the two figures move together with the machine's
-    load."""
-    sim = rover(False)
-    device = sim.robot.devices["u0"]
-    return best(lambda: device.simulate(0.0, sim), 5000) * 1e9 / 7
+def step_runs(count: int) -> dict[str, Callable[[], object]]:
+    """``count`` steps of the rover driving back and forth: without a LiDAR, with the default
+    one (5.5 Hz, the A1M8's noise), with one noise off, and with one that never scans (what a
+    step costs the LiDAR when no scan is due)."""
+    variants: dict[str, dict[str, Any] | None] = {
+        "without": None,
+        "with": {},
+        "quiet": QUIET,
+        "no_scan": NEVER,
+    }
+    runs: dict[str, Callable[[], object]] = {}
+    for name, settings in variants.items():
+        sim = rover(settings is not None, settings)
 
+        def run(sim: Simulation = sim) -> None:
+            for _ in range(count):
+                if not sim.robot.any_drive_moving:
+                    sim.command("w0-12" if sim.steps % 2 else "w0--12")
+                sim.step()
 
-def steps_per_second(lidar: bool, count: int = 6000) -> float:
-    """Steps a second of the rover driving back and forth, with or without its LiDAR."""
-    sim = rover(lidar)
-
-    def run() -> None:
-        for _ in range(count):
-            if not sim.robot.any_drive_moving:
-                sim.command("w0-12" if sim.steps % 2 else "w0--12")
-            sim.step()
-
-    run()
-    return 1.0 / best(run, 1) * count
-
-
-def steps_per_cpu_second(count: int = 6000) -> tuple[float, float]:
-    """Steps per CPU second of the rover with and without its LiDAR, the two measured in turn
-    (best of REPEATS each): on a machine others load, wall-clock figures taken a few seconds
-    apart see different shares of the CPU, and CPU time does not."""
-    rovers = {True: rover(True), False: rover(False)}
-    best_cpu = {True: math.inf, False: math.inf}
-
-    def run(sim: Simulation) -> float:
-        start = time.process_time()
-        for _ in range(count):
-            if not sim.robot.any_drive_moving:
-                sim.command("w0-12" if sim.steps % 2 else "w0--12")
-            sim.step()
-        return time.process_time() - start
-
-    for sim in rovers.values():
-        run(sim)  # warm-up
-    for _ in range(REPEATS):
-        for lidar, sim in rovers.items():
-            best_cpu[lidar] = min(best_cpu[lidar], run(sim))
-    return count / best_cpu[True], count / best_cpu[False]
+        runs[name] = run
+    return runs
 
 
 def table_seconds() -> float:
-    """The lab maze's LiDAR table at 1 in (heading 0; every heading is it rotated)."""
+    """The lab maze's LiDAR table at 1 in (heading 0; every heading is it rotated), wall-clock
+    (the second of two, the first compiling)."""
     from simmer.localize.files import lidar_table
 
     sim = rover(True)
@@ -123,28 +121,36 @@ def table_seconds() -> float:
 
 def main() -> dict[str, float]:
     """Measure and print every figure with its target."""
-    figures = {"scan_us": scan_microseconds(quiet=True)}
-    print(f"one 360-beam scan, noise off: {figures['scan_us']:.1f} us (target <= 30, stretch 10)")
-    cpu = scan_microseconds(quiet=True, clock=time.process_time)
-    print(f"  the same by CPU time: {cpu:.1f} us")
-    ray = ultrasonic_ray_nanoseconds()
+    scan = in_turns(scan_runs(), 500)
+    us = {name: value * 1e6 for name, value in scan.items()}
+    figures = {"scan_us": us["quiet"], "scan_noisy_us": us["noisy"], "draws_us": us["draws"]}
     print(
-        f"  per beam {figures['scan_us'] * 1e3 / 360:.0f} ns; an ultrasonic read's ray, "
-        f"Python call included: {ray:.0f} ns"
+        f"one 360-beam scan, noise off: {us['quiet']:.1f} us of CPU (target <= 30, stretch 10); "
+        f"per beam {us['quiet'] * 1e3 / 360:.0f} ns (an ultrasonic read's ray, Python call "
+        f"included: {us['ray'] * 1e3 / 7:.0f} ns)"
     )
-    noisy = scan_microseconds(quiet=False)
-    print(f"one 360-beam scan with the A1M8's noise drawn: {noisy:.1f} us")
-    with_lidar, without = steps_per_second(True), steps_per_second(False)
-    figures["steps_ratio"] = with_lidar / without
     print(
-        f"steps/s with a LiDAR at 5.5 Hz: {with_lidar:,.0f}; without: {without:,.0f}; "
-        f"ratio {figures['steps_ratio']:.3f} (target >= 0.9)"
+        f"  with the A1M8's noise drawn: {us['noisy']:.1f} us, of which the draws (720 normals, "
+        f"360 uniforms) {us['draws']:.1f} us"
     )
-    cpu_with, cpu_without = steps_per_cpu_second()
-    figures["steps_ratio_cpu"] = cpu_with / cpu_without
+    count = 2000
+    steps = in_turns(step_runs(count), 1)
+    per_step = {name: value / count * 1e6 for name, value in steps.items()}
+    base = per_step["without"]
+    for name in ("with", "quiet", "no_scan"):
+        figures[f"step_{name}_us"] = per_step[name] - base
+    figures["steps_ratio"] = base / per_step["with"]
+    figures["steps_ratio_quiet"] = base / per_step["quiet"]
     print(
-        f"steps per CPU second, measured in turn: {cpu_with:,.0f} with; {cpu_without:,.0f} "
-        f"without; ratio {figures['steps_ratio_cpu']:.3f} (target >= 0.9)"
+        f"steps per CPU second, the rovers in turn: {1e6 / per_step['with']:,.0f} with a LiDAR "
+        f"at 5.5 Hz, {1e6 / base:,.0f} without: ratio {figures['steps_ratio']:.3f} "
+        "(target >= 0.9)"
+    )
+    print(
+        f"  the LiDAR's cost a step: {figures['step_with_us']:.2f} us (noise off: "
+        f"{figures['step_quiet_us']:.2f} us, ratio {figures['steps_ratio_quiet']:.3f}; a step "
+        f"with no scan due: {figures['step_no_scan_us']:.2f} us) against {base:.1f} us a step "
+        "without it"
     )
     figures["table_s"] = table_seconds()
     print(f"lab maze LiDAR table at 1 in: {figures['table_s']:.2f} s (target < 2)")

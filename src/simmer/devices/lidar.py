@@ -28,6 +28,7 @@ whole scan consistently: ``simmer.client.Client.scan``.
 
 from __future__ import annotations
 
+import bisect
 import math
 from typing import ClassVar
 
@@ -129,10 +130,24 @@ class Lidar(Device):
         self.scan_time = 0.0
         """When the latest scan ended, simulated seconds."""
         self._times: list[float] = []
-        self._poses: list[tuple[float, float, float]] = []
+        """When each pose of ``_poses`` was recorded: the revolution under way's steps."""
+        self._poses: list[float] = []
+        """The robot's poses at ``_times``, flat (x, y, heading unwrapped, x, ...): a list
+        appended to each step and made an array once a scan, the cheapest way per step."""
         self._true = np.empty(n)
         self._beam_poses = np.empty((n, 3))
         self._noise = np.zeros((3, n))
+        """Each scan's draws: beams' direction and range errors in standard deviations, and
+        uniform draws against the dropout chance (rows left 0 when their noise is off)."""
+        jitter, ranged = (
+            params.angular_jitter,
+            params.range_error or params.range_error_proportional,
+        )
+        rows = slice(0 if jitter else 1, 2 if ranged else 1)
+        self._normals = self._noise[rows] if rows.start < rows.stop else None
+        """The rows of ``_noise`` drawn as standard normals, in one call (the stream's order
+        as drawing each row alone)."""
+        self._uniforms = self._noise[2] if params.dropout else None
         self._offsets = self.period * (np.arange(n) / n)
         """When each beam is measured after its revolution starts, seconds."""
         self._limits = np.array(
@@ -142,6 +157,7 @@ class Lidar(Device):
                 params.range_error,
                 params.range_error_proportional,
                 params.dropout,
+                params.angular_jitter,
             ]
         )
         self._due = self.period - 1e-9
@@ -162,49 +178,56 @@ class Lidar(Device):
 
     # -- stepping ------------------------------------------------------------------------
 
-    def _record(self, world: World) -> None:
+    def _record(self, world: World) -> float:
         """Keep the robot's pose now (its heading unwrapped from the last one's), and the
-        first scan (at the start pose) if none is made yet."""
+        first scan (at the start pose) if none is made yet; the time now. Called every step:
+        kept lean (a step without a scan costs the LiDAR a few tenths of a microsecond)."""
+        now = world.time
+        times = self._times
+        if not times:
+            self._first(world)
+        if now <= times[-1]:
+            return now
         pose = world.robot.pose
-        if not self._times:
-            start = world.robot.start_pose if world.time > 0.0 else pose
-            self._times.append(0.0)
-            self._poses.append((start.x, start.y, start.heading))
-            self._heading = start.heading
-            self._scan(world, 0.0, skew=False)
-        if world.time <= self._times[-1]:
-            return
-        last = self._poses[-1][2]  # the heading within a half turn of the last (exact if 0)
-        self._times.append(world.time)
-        turns = round((last - pose.heading) / 360.0)
-        self._poses.append((pose.x, pose.y, pose.heading + 360.0 * turns))
-        self._heading = pose.heading
+        heading = pose.heading
+        poses = self._poses
+        last = poses[-1]
+        times.append(now)
+        if -180.0 < last - heading < 180.0:  # within a half turn of the last: as it is
+            poses.extend(pose)
+        else:
+            poses += (pose.x, pose.y, heading + 360.0 * round((last - heading) / 360.0))
+        self._heading = heading
+        return now
+
+    def _first(self, world: World) -> None:
+        """The first pose recorded and the scan the spinning LiDAR made there before the run
+        began (the start pose's, if the run has begun)."""
+        start = world.robot.start_pose if world.time > 0.0 else world.robot.pose
+        self._times.append(0.0)
+        self._poses += (start.x, start.y, start.heading)
+        self._heading = start.heading
+        self._scan(world, 0.0, skew=False)
 
     def update(self, world: World) -> None:
         """Record this step's pose; cast every scan whose revolution has ended."""
-        self._record(world)
-        if world.time < self._due:
+        now = self._record(world)
+        if now < self._due:
             return
-        while world.time >= self._due:
+        while now >= self._due:
             self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
-        keep = 0  # drop the poses before the revolution under way (one before it stays)
-        while keep + 1 < len(self._times) and self._times[keep + 1] <= self.scan_time:
-            keep += 1
-        if keep:
-            del self._times[:keep], self._poses[:keep]
+        # drop the poses before the revolution under way (the one before it stays)
+        keep = bisect.bisect_right(self._times, self.scan_time) - 1
+        if keep > 0:
+            del self._times[:keep], self._poses[: 3 * keep]
 
     def _scan(self, world: World, end: float, *, skew: bool) -> None:
         """Cast the revolution ending at ``end`` and draw its noise (see the module doc)."""
-        s = self.settings
-        n = s.beams
         noise = self._noise
-        if s.angular_jitter:
-            noise[0] = self.rng.normal(0.0, s.angular_jitter, n)
-        if s.range_error or s.range_error_proportional:
-            noise[1] = self.rng.standard_normal(n)
-        if s.dropout:
-            noise[2] = self.rng.random(n)
-        beam_times = self._offsets + (end - self.period) if skew else np.full(n, end)
+        if self._normals is not None:
+            self.rng.standard_normal(out=self._normals)
+        if self._uniforms is not None:
+            self.rng.random(out=self._uniforms)
         maze = world.maze
         scan_revolution(
             maze.hwall,
@@ -214,9 +237,12 @@ class Lidar(Device):
             world.block.segments,
             self.sees_block(world),
             np.array(self._times),
-            np.array(self._poses),
+            np.array(self._poses).reshape(-1, 3),
             self._heading,
-            beam_times,
+            end - self.period,
+            end,
+            skew,
+            self._offsets,
             self.mount,
             self.directions,
             self._limits,

@@ -22,6 +22,7 @@ trace's budget so that scans never cut a replayable recording short. Read back o
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Callable
 from contextlib import suppress
@@ -47,8 +48,16 @@ def lidar_ids(sim: Simulation) -> list[str]:
 
 
 def _cell(values: np.ndarray) -> str:
-    """Numbers as one cell: three decimals, space-separated (``nan`` as itself)."""
-    return " ".join([f"{v:.3f}" for v in values.tolist()])
+    """Numbers as one cell: three decimals, space-separated (``nan`` as itself). One
+    ``%`` of a format made once per length: half the time of formatting each number alone
+    (a recorded scan is some thousand numbers), the same text."""
+    return _cell_format(values.shape[0]) % tuple(values.tolist())
+
+
+@functools.cache
+def _cell_format(count: int) -> str:
+    """``%.3f`` ``count`` times, space-separated (one a LiDAR's beam count: a few at most)."""
+    return " ".join(["%.3f"] * count)
 
 
 class ScanWriter:
