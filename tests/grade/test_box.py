@@ -6,7 +6,9 @@ theirs is left behind."""
 from __future__ import annotations
 
 import csv
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,7 @@ import pytest
 from grade_support import GOOD, grading_folder
 from simmer.grade import load_grading, run_grading
 from simmer.lockstep.box import BOX_UID_BASE
+from simmer.lockstep.netns import unavailable
 from simmer.proctree import descendants
 from simmer.sweep import local_pool
 
@@ -174,25 +177,30 @@ except OSError as exc:
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
-@pytest.mark.skipif(
-    _landlock_abi() < 4,
-    reason=f"Landlock's TCP rules need ABI 4 (Linux 6.7); this machine has {_landlock_abi()}",
-)
 @pytest.mark.parametrize("landlock", [True, False])
-def test_landlock_lets_a_boxed_program_connect_to_its_run_s_ports_only(
+def test_the_box_lets_a_program_connect_to_its_run_s_ports_only(
     tmp_path: Path, landlock: bool
 ) -> None:
     """The team's program calls a port outside its run (the test's own listener), then does
-    its delivery through its run's ports: refused and delivered in its box; without Landlock
-    (``landlock = false``) the same call gets through, so the refusal is the box's."""
+    its delivery through its run's ports: refused and delivered in its box, by Landlock alone
+    (``network = false``), or by its network namespace alone (``landlock = false``: nothing
+    listens at that port in its own network). Without either the call gets through:
+    ``test_a_boxed_program_s_network_holds_the_simulator_s_ports_only``."""
     import socket
 
+    if landlock and _landlock_abi() < 4:
+        pytest.skip(
+            f"Landlock's TCP rules need ABI 4 (Linux 6.7); this machine has {_landlock_abi()}"
+        )
+    if not landlock and unavailable():
+        pytest.skip(f"no network namespaces here: {unavailable()}")
     with socket.create_server(("127.0.0.1", 0)) as outside:
         port = outside.getsockname()[1]
         program = CALLER.replace("OUTSIDE", str(port)) + GOOD.replace(
             "    main()\n", '    main()\n    raise SystemExit(f"the outside call: {called}")\n'
         )
-        extra = f"[limits]\nlandlock = {'true' if landlock else 'false'}"
+        on, off = ("landlock", "network") if landlock else ("network", "landlock")
+        extra = f"[limits]\n{on} = true\n{off} = false"
         spec = load_grading(
             grading_folder(tmp_path / "course", extra, {"Caller": program}, targets=("B1",))
         )
@@ -206,9 +214,86 @@ def test_landlock_lets_a_boxed_program_connect_to_its_run_s_ports_only(
     (r,) = _rows(tmp_path / "out" / "results.csv")
     assert r["delivered"] == "True"  # its own run's ports: allowed
     assert r["status"] == "error"
+    assert not reached
     if landlock:
         assert "the outside call: refused: PermissionError(13, 'Permission denied')" in r["detail"]
-        assert not reached
     else:
-        assert "the outside call: connected" in r["detail"]
-        assert reached
+        refused = "the outside call: refused: ConnectionRefusedError(111, 'Connection refused')"
+        assert refused in r["detail"]
+
+
+REACHER = """import errno, os, socket, sys
+def call(address, kind=socket.SOCK_STREAM):
+    try:
+        with socket.socket(socket.AF_INET, kind) as s:
+            s.settimeout(5)
+            if kind == socket.SOCK_DGRAM:
+                s.sendto(b"hello", address)
+                return "sent"
+            s.connect(address)
+            return "connected"
+    except OSError as exc:
+        return errno.errorcode.get(exc.errno, str(exc))
+print("simulator", call(("127.0.0.1", int(sys.argv[1]))))
+print("outside", call(("127.0.0.1", int(sys.argv[2]))))
+print("external", call(("192.0.2.1", 80)))
+print("udp", call(("192.0.2.1", 53), socket.SOCK_DGRAM))
+"""
+
+
+@pytest.mark.skipif(bool(unavailable()), reason=f"no network namespaces here: {unavailable()}")
+@pytest.mark.parametrize("network", [True, False])
+def test_a_boxed_program_s_network_holds_the_simulator_s_ports_only(
+    tmp_path: Path, network: bool
+) -> None:
+    """A boxed program (Landlock off, so the refusals are the namespace's) reaches the run's
+    listener, which the namespace's helper opened and this process accepts on; a listener of
+    this machine outside the box, an address beyond it and a UDP datagram do not get out.
+    Without the namespace the same calls get through."""
+    import socket
+
+    from grade_support import PYTHON
+    from simmer.lockstep import Program
+    from simmer.lockstep.box import Box, BoxLimits, make_box
+    from simmer.lockstep.netns import Network
+
+    team = tmp_path / "team"
+    team.mkdir()
+    (team / "reach.py").write_text(REACHER, encoding="utf-8")
+    limits = BoxLimits(landlock=False, network=network)
+    opened = Network.open("127.0.0.1", [0]) if network else None
+    assert not isinstance(opened, str)
+    with (
+        tempfile.TemporaryDirectory(prefix="simmer-run-") as scratch,  # as a grading's run
+        socket.create_server(("127.0.0.1", 0)) as outside,
+    ):
+        box = Box(limits, *make_box(team, Path(scratch)), opened)
+        simulator = opened.listeners[0] if opened else socket.create_server(("127.0.0.1", 0))
+        ports = [simulator.getsockname()[1], outside.getsockname()[1]]
+        read, write = os.pipe()
+        program = Program.start(
+            [PYTHON, "reach.py", *map(str, ports)], dict(os.environ), box=box, ports=ports,
+            output=write,
+        )  # fmt: skip
+        os.close(write)
+        status = program.wait(30)
+        with os.fdopen(read) as printed:
+            text = printed.read()
+        assert status == 0, text
+        said = dict(line.split() for line in text.splitlines())
+        simulator.settimeout(5)
+        simulator.accept()[0].close()  # the program's call arrived here, in its namespace
+        simulator.close()
+        if opened:
+            opened.close()
+    assert said["simulator"] == "connected"
+    if network:
+        assert said == {
+            "simulator": "connected",
+            "outside": "ECONNREFUSED",  # nothing listens there in its namespace
+            "external": "ENETUNREACH",
+            "udp": "ENETUNREACH",
+        }
+    else:
+        assert said["outside"] == "connected"
+        assert said["udp"] == "sent"

@@ -61,7 +61,9 @@ def violations(cells: Mapping[str, str]) -> list[str]:
         named = SIGNALS.get(exit_status) or next(
             (kind for words, kind in PATTERNS if words in detail), ""
         )
-        if "Permission denied" in detail and "connect" in detail:
+        if ("Permission denied" in detail and "connect" in detail) or (
+            "Network is unreachable" in detail  # no network but the simulator's (its own)
+        ):
             named = "network-refused"
         if named:
             found.append(named)
@@ -183,9 +185,10 @@ def write_board(
     rows: Sequence[Mapping[str, str]],
     source: str,
     thumbnails: Mapping[str, str],
+    notes: Sequence[str] = (),
 ) -> list[Standing]:
     """Write leaderboard.csv, leaderboard.md, index.html, teams/TEAM.md and violations.csv
-    into ``folder``; the standings."""
+    into ``folder``; the standings. ``notes``: lines about the box put under the table."""
     table = standings(spec, rows)
     lines = board_rows(spec, table)
     _write_csv(folder / "leaderboard.csv", [list(BOARD_COLUMNS), *lines])
@@ -207,6 +210,7 @@ def write_board(
                 rule,
                 *body,
                 "",
+                *[f"Note: {_md(note)}\n" for note in notes],
             ]
         ),
     )
