@@ -1,6 +1,7 @@
 """The box, tested for what it really enforces here (Linux): a fork bomb, a memory hog, a disk
-filler, an infinite loop and a program reading another team's folder are each stopped or
-refused and reported; the good team's results are the same as graded alone; no process of
+filler, an infinite loop, a program reading another team's folder and three that flood the
+link (commands without reading, a line without end, connections without end) are each
+stopped or refused and reported; the good team's results are the same as graded alone; no process of
 theirs is left behind."""
 
 from __future__ import annotations
@@ -49,6 +50,21 @@ secret = Path(TARGET)
 print("trying", secret.name, flush=True)
 print(secret.read_text()[:100])
 """
+FLOOD = """import os, socket
+link = socket.create_connection(("127.0.0.1", int(os.environ["SIMMER_PORT"])))
+while True:
+    link.sendall(b"u0\\n" * 1000)  # as fast as it can, never reading a reply
+"""
+ENDLESS_LINE = """import os, socket
+link = socket.create_connection(("127.0.0.1", int(os.environ["SIMMER_PORT"])))
+while True:
+    link.sendall(b"w" * 65536)  # one line that never ends
+"""
+OPENER = """import os, socket
+held = []
+while True:  # connections without end, none closed
+    held.append(socket.create_connection(("127.0.0.1", int(os.environ["SIMMER_PORT_RX"]))))
+"""
 LIMITS = """[limits]
 cpu_seconds = 3
 memory_mb = 400
@@ -84,7 +100,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(900)  # 7 program runs up to their limits (30 wall s): room on busy cores
+@pytest.mark.timeout(900)  # 10 program runs up to their limits (30 wall s): room on busy cores
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the box's limits are Linux's")
 def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
     tmp_path: Path,
@@ -95,6 +111,9 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
         "Hog": MEMORY_HOG,
         "Filler": DISK_FILLER,
         "Loop": LOOP,
+        "Flood": FLOOD,
+        "Endless": ENDLESS_LINE,
+        "Opener": OPENER,
         "Spy": SPY.replace(
             "TARGET", repr(str(tmp_path / "course" / "teams" / "good" / "robot.py"))
         ),
@@ -138,6 +157,21 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
         assert "Permission denied" in r["detail"]
         assert "team writes it" not in r["detail"]
     assert ("Spy", "refused-access") in log
+    # the flood: every message costs the link's simulated time, so it ends at the grading's
+    # simulated-time limit (300 s, a message a step); its unread replies wait in its socket
+    for r in by_team["Flood"]:
+        assert r["status"] == "seconds"
+        assert r["messages"] == str(300 * 60)
+    assert ("Flood", "time-limit") in log
+    # the endless line: refused at 64 KiB (MAX_MESSAGE_BYTES), its connection closed
+    for r in by_team["Endless"]:
+        assert (r["status"], r["over_limit"], r["messages"]) == ("error", "1", "0")
+    assert ("Endless", "message-limit") in log
+    # connections without end: stopped at its box's 64 open files
+    for r in by_team["Opener"]:
+        assert r["status"] == "error"
+        assert "Too many open files" in r["detail"]
+    assert ("Opener", "open-files-limit") in log
     # the good team: its numbers are those it gets graded alone
     alone_rows = _rows(tmp_path / "alone" / "results.csv")
     skip = {"wall_time"}
@@ -297,3 +331,18 @@ def test_a_boxed_program_s_network_holds_the_simulator_s_ports_only(
     else:
         assert said["outside"] == "connected"
         assert said["udp"] == "sent"
+
+
+@pytest.mark.skipif(bool(unavailable()), reason=f"no network namespaces here: {unavailable()}")
+def test_a_network_that_cannot_be_made_says_why_and_leaves_nothing_open() -> None:
+    """An address the namespace's loopback does not have: one line saying why (what a run
+    then writes in its output, going on in the machine's network), no descriptor kept."""
+    from simmer.lockstep.netns import Network
+
+    before = set(os.listdir("/proc/self/fd"))
+    said = Network.open("192.0.2.7", [0, 0, 0])
+    assert isinstance(said, str)
+    assert said.startswith(
+        "cannot make a network namespace here: [Errno 99] Cannot assign requested address"
+    )
+    assert set(os.listdir("/proc/self/fd")) <= before

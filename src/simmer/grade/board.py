@@ -32,6 +32,8 @@ VIOLATIONS = {
     "open-files-limit": "it opened more files than [limits] open_files",
     "refused-access": "it tried to read or write outside its box",
     "network-refused": "it tried a connection other than to the simulator",
+    "message-limit": "it sent a message over MAX_MESSAGE_BYTES (64 KiB, a line without end: "
+    "its connection closed) or MAX_COMMANDS (1,000 commands): refused whole",
 }
 """The kinds of violation the log records, and what each means."""
 MILESTONES = ("entered_loading_at", "picked_up_at", "left_loading_at", "delivered_at")
@@ -75,6 +77,8 @@ def violations(cells: Mapping[str, str]) -> list[str]:
         found.append("collision")
     if cells["nan_replies"] not in ("", "0"):
         found.append("protocol")
+    if cells.get("over_limit", "") not in ("", "0"):
+        found.append("message-limit")
     return found
 
 

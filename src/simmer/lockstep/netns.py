@@ -66,16 +66,20 @@ class Network:
             theirs.close()
             mine.settimeout(HELPER_SECONDS)
             try:
-                message, fds, _flags, _address = socket.recv_fds(mine, 4096, len(ports) + 2)
+                data, fds, _flags, _address = socket.recv_fds(mine, 4096, len(ports) + 2)
+                message = data.decode(errors="replace")
             except OSError as exc:
-                message, fds = f"the helper did not answer: {exc}".encode(), []
+                message = (
+                    f"its helper did not answer within {HELPER_SECONDS:g} s (HELPER_SECONDS): {exc}"
+                )
+                fds = []
             finally:
                 try:
                     helper.wait(HELPER_SECONDS)
                 except subprocess.TimeoutExpired:
                     helper.kill()
                     helper.wait()
-        text = message.decode(errors="replace")
+        text = message
         if not text.startswith("ok ") or len(fds) < len(ports) + 1:
             for fd in fds:
                 os.close(fd)

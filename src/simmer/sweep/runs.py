@@ -375,6 +375,8 @@ def _run_program(
         network = None
         if run.box.network:  # else, or where it cannot be made: the machine's (said once)
             opened = Network.open(sim.config.settings.host, [0, 0, 0])
+            if isinstance(opened, str):  # before the program's output, so rarely in its tail
+                output.write(f"SimMeR box: no network of its own for this run: {opened}\n")
             network = opened if isinstance(opened, Network) else None
         box = Box(run.box, *make_box(Path(run.folder), extras.scratch), network)
         output.hidden.append(f"{box.work}{os.sep}")  # its traceback names robot.py, not where
