@@ -119,7 +119,7 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
         ),
     }
     spec = load_grading(
-        grading_folder(tmp_path / "course", LIMITS, teams, targets=("B1",), wall=30)
+        grading_folder(tmp_path / "course", LIMITS, teams, targets=("B1",), wall=30, seconds=60)
     )
     run_grading(spec, tmp_path / "all", engine=local_pool(2), workers=2)
     alone = spec.only(tmp_path / "course" / "teams" / "good")
@@ -158,10 +158,10 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
         assert "team writes it" not in r["detail"]
     assert ("Spy", "refused-access") in log
     # the flood: every message costs the link's simulated time, so it ends at the grading's
-    # simulated-time limit (300 s, a message a step); its unread replies wait in its socket
+    # simulated-time limit (60 s, a message a step); its unread replies wait in its socket
     for r in by_team["Flood"]:
         assert r["status"] == "seconds"
-        assert r["messages"] == str(300 * 60)
+        assert r["messages"] == str(60 * 60)
     assert ("Flood", "time-limit") in log
     # the endless line: refused at 64 KiB (MAX_MESSAGE_BYTES), its connection closed
     for r in by_team["Endless"]:
