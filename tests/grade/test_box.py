@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -346,3 +347,43 @@ def test_a_network_that_cannot_be_made_says_why_and_leaves_nothing_open() -> Non
         "cannot make a network namespace here: [Errno 99] Cannot assign requested address"
     )
     assert set(os.listdir("/proc/self/fd")) <= before
+
+
+NOTE_PROBE = """import sys
+from simmer.grade import load_grading
+from simmer.grade.engine import box_notes
+print("\\n".join(box_notes(load_grading(sys.argv[1]))))
+"""
+
+
+@pytest.mark.skipif(
+    bool(unavailable()) or not shutil.which("unshare"),
+    reason="needs namespaces and util-linux's unshare to make a machine that forbids them",
+)
+def test_a_grading_where_namespaces_are_forbidden_says_so_in_one_line(tmp_path: Path) -> None:
+    """Inside a user namespace whose ``max_net_namespaces`` is 0 (a machine that forbids
+    them, made for this test alone), the grading's note says why the box has no network of
+    its own; outside it, and with ``network = false``, there is no note."""
+    import subprocess
+
+    grading = grading_folder(tmp_path, "", {"Good": GOOD}, targets=("B1",))
+    probe = tmp_path / "probe.py"
+    probe.write_text(NOTE_PROBE, encoding="utf-8")
+    forbid = 'echo 0 > /proc/sys/user/max_net_namespaces && exec "$0" "$@"'
+    said = subprocess.run(
+        ["unshare", "-r", "sh", "-c", forbid, sys.executable, str(probe), str(grading)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    ).stdout
+    assert said.startswith(
+        "the box: no network of its own for each program here (cannot make a network "
+        "namespace here: [Errno 28] unshare: No space left on device); programs share this "
+        "machine's network"
+    )
+    from simmer.grade.engine import box_notes
+
+    assert box_notes(load_grading(grading)) == ()
+    off = grading_folder(tmp_path / "off", "[limits]\nnetwork = false", {"Good": GOOD})
+    assert box_notes(load_grading(off)) == ()

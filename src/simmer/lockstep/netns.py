@@ -92,11 +92,14 @@ class Network:
         return cls(listeners, fds[len(ports) :], kinds)
 
     def close(self) -> None:
-        """Close the namespaces' descriptors (the listeners are the servers' to close)."""
+        """Close the namespaces' descriptors and the listeners (the servers close them too,
+        when they took them; closing one twice is nothing)."""
         for fd in self.namespaces:
             with contextlib.suppress(OSError):
                 os.close(fd)
         self.namespaces = []
+        for listener in self.listeners:
+            listener.close()
 
 
 def unavailable() -> str:

@@ -372,13 +372,14 @@ def _run_program(
         from simmer.lockstep.box import Box, make_box
         from simmer.lockstep.netns import Network
 
+        work, tmp = make_box(Path(run.folder), extras.scratch)
         network = None
         if run.box.network:  # else, or where it cannot be made: the machine's (said once)
             opened = Network.open(sim.config.settings.host, [0, 0, 0])
             if isinstance(opened, str):  # before the program's output, so rarely in its tail
                 output.write(f"SimMeR box: no network of its own for this run: {opened}\n")
             network = opened if isinstance(opened, Network) else None
-        box = Box(run.box, *make_box(Path(run.folder), extras.scratch), network)
+        box = Box(run.box, work, tmp, network)
         output.hidden.append(f"{box.work}{os.sep}")  # its traceback names robot.py, not where
     try:
         return _serve_program(run, sim, extras, output, answer, box)
