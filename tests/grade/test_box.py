@@ -82,6 +82,17 @@ def _command(pid: int) -> str:
         return ""
 
 
+def _state(pid: int) -> str:
+    """A process's state, parent and user (what a failure shows of one left behind)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return "gone"
+    return " ".join(
+        line for line in status.splitlines() if line.startswith(("State", "PPid", "Uid"))
+    )
+
+
 def _box_users() -> list[int]:
     """Processes running as a box's own user (root gives each box one)."""
     found = []
@@ -126,7 +137,8 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
     alone = spec.only(tmp_path / "course" / "teams" / "good")
     run_grading(alone, tmp_path / "alone", engine=local_pool(1), workers=1)
     left = [pid for pid in descendants() if "robot.py" in _command(pid)]
-    assert left == []  # no process of theirs left (the forkserver stays, as it does for sweeps)
+    # no process of theirs left (the forkserver stays, as it does for sweeps)
+    assert left == [], [(_command(pid), _state(pid)) for pid in left]
     assert _box_users() == []  # nor anywhere else, however it detached
 
     rows = _rows(tmp_path / "all" / "results.csv")
@@ -356,6 +368,7 @@ print("\\n".join(box_notes(load_grading(sys.argv[1]))))
 """
 
 
+@pytest.mark.slow  # a Python importing simmer.grade: 1.2 CPU s
 @pytest.mark.skipif(
     bool(unavailable()) or not shutil.which("unshare"),
     reason="needs namespaces and util-linux's unshare to make a machine that forbids them",
