@@ -25,6 +25,8 @@ memory_mb = 1024
 file_mb = 16
 processes = 32
 open_files = 256
+landlock = true                # Linux: files, ports and signals confined
+network = true                 # Linux: a network of its own, the simulator's ports only
 
 [[team]]
 name = "Team 1"
