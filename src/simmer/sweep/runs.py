@@ -376,7 +376,7 @@ def _run_program(
         network = None
         if run.box.network:  # else, or where it cannot be made: the machine's (said once)
             opened = Network.open(sim.config.settings.host, [0, 0, 0])
-            if isinstance(opened, str):  # before the program's output, so rarely in its tail
+            if isinstance(opened, str) and sys.platform.startswith("linux"):  # else: said once
                 output.write(f"SimMeR box: no network of its own for this run: {opened}\n")
             network = opened if isinstance(opened, Network) else None
         box = Box(run.box, work, tmp, network)
