@@ -5,8 +5,10 @@ Run ``python benchmarks/bench_grade.py`` (or ``python benchmarks/run.py`` for ev
 The program is the course project's example, ``examples/project_delivery.py`` (plain two-port
 sockets, told its target at an ``input()`` prompt), on ``examples/project.toml`` over the four
 target zones and two seeds. A sweep run keeps nothing; a grading run is the same run in a box
-(its own copy of the team's folder, rlimits, Landlock where the kernel has it, its own user as
-root) and keeps its whole folder (the replay the page links). Per-worker figures run in this
+(its own copy of the team's folder, rlimits, Landlock where the kernel has it, a network
+namespace of its own where the machine allows it, its own user as root) and keeps its whole
+folder (the replay the page links); the same boxed without the network namespace gives the
+namespace's cost. Per-worker figures run in this
 process one run after another after a warm-up run; whole gradings go through the process pool
 and include its start-up, the leaderboard, the reports and a thumbnail per team.
 """
@@ -109,15 +111,20 @@ def main() -> dict[str, float]:
         sweep = sweep_runs(folder)
         graded = grading_runs(folder, 1).runs()
         unboxed = [replace(run, box=None) for run in graded]
+        shared = [
+            replace(run, box=replace(run.box, network=False)) if run.box else run for run in graded
+        ]
         figures = {
             "sweep": runs_per_second(sweep),
             "kept": runs_per_second(unboxed),
             "grade": runs_per_second(graded),
+            "shared": runs_per_second(shared),
         }
         for workers in (1, 2):
             figures[f"whole_{workers}"] = whole_grading(folder, 2, workers)
     figures["ratio"] = figures["grade"] / figures["sweep"]
     figures["box_ms"] = 1000 / figures["grade"] - 1000 / figures["kept"]
+    figures["network_ms"] = 1000 / figures["grade"] - 1000 / figures["shared"]
     figures["speedup"] = figures["whole_2"] / figures["whole_1"]
     runs = len(TARGETS) * len(SEEDS)
     rows = [
@@ -126,6 +133,8 @@ def main() -> dict[str, float]:
         ("grading: program runs/s per worker (boxed, kept whole)", "grade"),
         ("  grading / sweep", "ratio"),
         ("  the box's cost per run, ms (boxed minus kept)", "box_ms"),
+        ("boxed without a network namespace of its own: runs/s per worker", "shared"),
+        ("  the network namespace's cost per run, ms", "network_ms"),
         (f"whole grading, 2 teams x {runs} scenarios, 1 worker: runs/s", "whole_1"),
         ("the same, 2 workers: runs/s", "whole_2"),
         ("  speed-up from 1 to 2 workers", "speedup"),

@@ -43,6 +43,7 @@ def grading_folder(
     teams: dict[str, str] | None = None,
     targets: tuple[str, ...] = ("B1", "B3"),
     wall: int = 60,
+    seconds: int = 300,
 ) -> Path:
     """A grading folder: project.toml, a folder per team, GRADING.toml; the file's path."""
     root.mkdir(parents=True, exist_ok=True)
@@ -50,7 +51,7 @@ def grading_folder(
     lines = [
         'config = "project.toml"',
         'answer = "{target}"',
-        "seconds = 300",
+        f"seconds = {seconds}",
         f"wall_seconds = {wall}",
         'success = "delivered and collisions == 0"',
         extra,

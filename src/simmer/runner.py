@@ -161,6 +161,8 @@ class Runner:
         self._log = _LogBudget()
         self._forgiven = 0
         """Bytes a clock message gave up waiting for (:data:`SYNC_WAIT`), counted as taken."""
+        self.over_limit = 0
+        """Messages refused whole at a message limit (``MAX_MESSAGE_BYTES``, ``MAX_COMMANDS``)."""
         self.localization = Localization(sim)
         """Answers ``%maze``, ``%show`` and ``%pose``, and keeps their bounds."""
 
@@ -233,7 +235,8 @@ class Runner:
                 replies = [answer.value for answer in answers]
                 if records := [(a.level, a.why) for a in answers if a.why is not None]:
                     self._report(printable(request.client), records, request.reasons)
-            case Refused(error=error, count=count, size=size):
+            case Refused(error=error, count=count, size=size, over_limit=over):
+                self.over_limit += over
                 self.clock.message(size)
                 error = printable(error)
                 client = printable(request.client)

@@ -214,6 +214,7 @@ def serve(sim: Simulation, options: RunOptions, echo: Callable[[str], None] = pr
     delay = 0.0 if link_on and options.link_delay is None else options.link_delay
     runner = Runner(sim, speed=options.speed, lockstep=options.lockstep, link_delay=delay)
     outcome = Outcome.attach(sim)
+    outcome.over_limit_count = lambda: runner.over_limit
     link_model = make_link(sim, runner)
     if link_model is not None:
         outcome.link_counts = link_model.model.counts.as_dict

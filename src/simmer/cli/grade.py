@@ -99,6 +99,8 @@ def grade(
             markup=False,
         )
         raise typer.Exit(128 + signum) from None
+    for note in done.notes:
+        err.print(note, markup=False)
     for rank, standing in enumerate(done.standings, 1):
         score = f"score {standing.score:.1f}, " if standing.score is not None else ""
         out.print(

@@ -32,6 +32,8 @@ VIOLATIONS = {
     "open-files-limit": "it opened more files than [limits] open_files",
     "refused-access": "it tried to read or write outside its box",
     "network-refused": "it tried a connection other than to the simulator",
+    "message-limit": "it sent a message over MAX_MESSAGE_BYTES (64 KiB, a line without end: "
+    "its connection closed) or MAX_COMMANDS (1,000 commands): refused whole",
 }
 """The kinds of violation the log records, and what each means."""
 MILESTONES = ("entered_loading_at", "picked_up_at", "left_loading_at", "delivered_at")
@@ -61,7 +63,9 @@ def violations(cells: Mapping[str, str]) -> list[str]:
         named = SIGNALS.get(exit_status) or next(
             (kind for words, kind in PATTERNS if words in detail), ""
         )
-        if "Permission denied" in detail and "connect" in detail:
+        if ("Permission denied" in detail and "connect" in detail) or (
+            "Network is unreachable" in detail  # no network but the simulator's (its own)
+        ):
             named = "network-refused"
         if named:
             found.append(named)
@@ -73,6 +77,8 @@ def violations(cells: Mapping[str, str]) -> list[str]:
         found.append("collision")
     if cells["nan_replies"] not in ("", "0"):
         found.append("protocol")
+    if cells.get("over_limit", "") not in ("", "0"):
+        found.append("message-limit")
     return found
 
 
@@ -183,9 +189,10 @@ def write_board(
     rows: Sequence[Mapping[str, str]],
     source: str,
     thumbnails: Mapping[str, str],
+    notes: Sequence[str] = (),
 ) -> list[Standing]:
     """Write leaderboard.csv, leaderboard.md, index.html, teams/TEAM.md and violations.csv
-    into ``folder``; the standings."""
+    into ``folder``; the standings. ``notes``: lines about the box put under the table."""
     table = standings(spec, rows)
     lines = board_rows(spec, table)
     _write_csv(folder / "leaderboard.csv", [list(BOARD_COLUMNS), *lines])
@@ -207,6 +214,7 @@ def write_board(
                 rule,
                 *body,
                 "",
+                *[f"Note: {_md(note)}\n" for note in notes],
             ]
         ),
     )

@@ -47,6 +47,8 @@ class GradeResult:
     standings: list[Standing]
     wall_time: float
     filmed: int = 0
+    notes: tuple[str, ...] = ()
+    """What the box could not enforce on this machine, a line each (also in leaderboard.md)."""
 
 
 def grade_columns(spec: GradeSpec) -> list[str]:
@@ -70,6 +72,7 @@ def run_grading(
     appended as it finishes and each run's folder kept under ``runs/``; then put the table in
     the grading's order, film each team's first failures and write the leaderboard."""
     started = time.perf_counter()
+    notes = box_notes(spec)
     runs = spec.runs()
     names = spec.folder_names()
     pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
@@ -105,8 +108,24 @@ def run_grading(
         pool.close()
     rows = read_rows(folder / "results.csv")
     thumbnails = _thumbnails(spec, folder, rows)
-    table = write_board(folder, spec, rows, source, thumbnails)
-    return GradeResult(folder, len(runs), len(todo), table, time.perf_counter() - started, filmed)
+    table = write_board(folder, spec, rows, source, thumbnails, notes)
+    wall = time.perf_counter() - started
+    return GradeResult(folder, len(runs), len(todo), table, wall, filmed, notes)
+
+
+def box_notes(spec: GradeSpec) -> tuple[str, ...]:
+    """A line for each part of the box asked for that this machine cannot give (the runs go
+    on without it): so far, a network of the program's own."""
+    from simmer.lockstep.netns import unavailable
+
+    why = unavailable() if spec.limits.network else ""
+    if not why:
+        return ()
+    return (
+        f"the box: no network of its own for each program here ({why}); programs share this "
+        "machine's network (Landlock's TCP port rules still apply where the kernel has them; "
+        "[limits] network = false says this on purpose)",
+    )
 
 
 def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: _Pool) -> int:

@@ -25,6 +25,8 @@ memory_mb = 1024
 file_mb = 16
 processes = 32
 open_files = 256
+landlock = true                # Linux: files, ports and signals confined
+network = true                 # Linux: a network of its own, the simulator's ports only
 
 [[team]]
 name = "Team 1"
@@ -82,7 +84,15 @@ KNOWN_KEYS = frozenset(
     }
 )
 TEAM_KEYS = frozenset({"name", "folder", "program", "config"})
-LIMIT_KEYS = ("cpu_seconds", "memory_mb", "file_mb", "processes", "open_files", "landlock")
+LIMIT_KEYS = (
+    "cpu_seconds",
+    "memory_mb",
+    "file_mb",
+    "processes",
+    "open_files",
+    "landlock",
+    "network",
+)
 MAX_TEAMS = 500
 """Teams in a grading file (a course of 400 students in teams of 4 has 100)."""
 MAX_SCENARIOS = 1_000
@@ -389,9 +399,9 @@ def _limits(value: Any) -> BoxLimits:
         )
     given: dict[str, Any] = {}
     for key, number in value.items():
-        if key == "landlock":
+        if key in ("landlock", "network"):
             if not isinstance(number, bool):
-                raise SweepError(f"[limits] landlock: true or false, not {number!r}")
+                raise SweepError(f"[limits] {key}: true or false, not {number!r}")
             given[key] = number
             continue
         top = MAX_LIMIT[key]

@@ -220,6 +220,7 @@ class Program:
         process = subprocess.Popen(
             args,
             env=dict(env),
+            pass_fds=box.network.namespaces if box is not None and box.network else (),
             start_new_session=True,
             cwd=folder,
             stdin=None if answer is None else subprocess.PIPE,

@@ -14,7 +14,9 @@ in the program's own process and then becomes the program. What is enforced wher
   (``RLIMIT_NOFILE``); Landlock (kernel 5.13+): reading only the system's, Python's and
   SimMeR's files and writing only in its box, so another team's folder is refused; (6.7+)
   TCP connections to this run's ports only, and no listening; (6.12+) no signals to
-  processes outside the box.
+  processes outside the box; a network namespace of its own (user namespaces, or root),
+  holding only the simulator's ports (:mod:`simmer.lockstep.netns`): no other port of this
+  machine, no other machine, no UDP.
 - **macOS**: the resource limits, except the address space (macOS does not enforce it) and
   with processes counted per user; no file or network confinement.
 - **Windows**: only the copy of the folder and the run's time limits.
@@ -30,6 +32,10 @@ import sys
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from simmer.lockstep.netns import Network
 
 LAUNCHER = Path(__file__).resolve().parent / "boxlaunch.py"
 """The file run before a boxed program (standard library only)."""
@@ -50,7 +56,9 @@ DEVICES = ("/dev/null", "/dev/zero", "/dev/urandom", "/dev/random", "/dev/tty", 
 @dataclass(frozen=True)
 class BoxLimits:
     """What a boxed program may use (None: no limit of that kind). ``landlock``: confine its
-    files, ports and signals where the kernel can (Linux)."""
+    files, ports and signals where the kernel can (Linux). ``network``: a network of its own
+    holding only the simulator's ports, where the machine can make one
+    (:mod:`simmer.lockstep.netns`)."""
 
     cpu_seconds: float | None = 60.0
     memory_mb: int | None = 1024
@@ -58,6 +66,7 @@ class BoxLimits:
     processes: int | None = 32
     open_files: int | None = 256
     landlock: bool = True
+    network: bool = True
 
 
 @dataclass(frozen=True)
@@ -68,6 +77,8 @@ class Box:
     limits: BoxLimits
     work: Path
     tmp: Path
+    network: Network | None = None
+    """The run's network namespace (None: the machine's network)."""
 
 
 def check_folder(folder: Path) -> None:
@@ -125,6 +136,8 @@ def boxed_command(args: list[str], box: Box, ports: list[int]) -> list[str]:
     )
     if os.name == "posix" and os.getuid() == 0:
         settings["uid"] = BOX_UID_BASE + os.getpid() % 100_000
+    if box.network is not None:  # inherited by the launcher, which joins them
+        settings["namespaces"] = dict(zip(box.network.kinds, box.network.namespaces, strict=True))
     return [sys.executable, "-I", str(LAUNCHER), json.dumps(settings), "--", *args]
 
 

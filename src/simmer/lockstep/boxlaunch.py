@@ -14,6 +14,9 @@ between the worker's fork and the program, so it must start in milliseconds. In 
    ports only, and bind none; with its scopes (6.12) it may not signal processes outside its
    box. An older kernel applies what it has, and ``box.json`` in the box says what was.
 
+Before them all, it joins the run's network namespace where it has one (Linux), holding
+only the simulator's ports (:mod:`simmer.lockstep.netns`).
+
 Any failure of a step that the kernel does not offer is recorded and the program still runs;
 a failure of a step it offers stops the launch (exit status 125, a line on standard error).
 """
@@ -55,6 +58,7 @@ _CREATE_RULESET, _ADD_RULE, _RESTRICT_SELF = 444, 445, 446  # every architecture
 _VERSION = 1
 _RULE_PATH_BENEATH, _RULE_NET_PORT = 1, 2
 _PR_SET_NO_NEW_PRIVS = 38
+_CLONE_NEWUSER, _CLONE_NEWNET = 0x10000000, 0x40000000
 
 
 class _PathBeneath(ctypes.Structure):
@@ -78,6 +82,23 @@ def _fail(text: str) -> NoReturn:
     sys.stderr.write(f"SimMeR box: {text}\n")
     sys.stderr.flush()
     os._exit(EXIT_BOX)
+
+
+def _join_network(settings: dict[str, Any], done: list[str]) -> None:
+    """Join the run's network namespace (:mod:`simmer.lockstep.netns`): the user namespace
+    that owns it first, where there is one (not as root)."""
+    spaces = settings.get("namespaces")
+    if not spaces:
+        return
+    libc = ctypes.CDLL(None, use_errno=True)
+    for kind, flag in (("user", _CLONE_NEWUSER), ("net", _CLONE_NEWNET)):
+        fd = spaces.get(kind)
+        if fd is None:
+            continue
+        if libc.setns(fd, flag) != 0:
+            _fail(f"cannot join the box's {kind} namespace (errno {ctypes.get_errno()})")
+        os.close(fd)
+    done.append("network namespace")
 
 
 def _become_box_user(settings: dict[str, Any], done: list[str]) -> None:
@@ -214,6 +235,7 @@ def main(argv: list[str]) -> None:
     settings = json.loads(argv[1])
     program = argv[3:]
     done: list[str] = []
+    _join_network(settings, done)
     _become_box_user(settings, done)
     _limit(settings, done)
     if settings.get("landlock", True):

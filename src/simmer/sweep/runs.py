@@ -45,7 +45,7 @@ from simmer.errors import LimitReached, WallLimitReached
 from simmer.sweep.success import DEFAULT_SUCCESS, succeeded
 
 if TYPE_CHECKING:
-    from simmer.lockstep.box import BoxLimits
+    from simmer.lockstep.box import Box, BoxLimits
     from simmer.world import Simulation
 
 ControllerKind = Literal["program", "policy"]
@@ -362,9 +362,6 @@ def _run_program(
 ) -> tuple[RunEnd, dict[str, Any], int | None]:
     """Serve the run headless on free ports and let the program drive it, in the run's
     folder (relative paths are the sweep file's) and writing to the run's ``output``."""
-    from simmer.options import RunOptions
-    from simmer.serve import serve
-
     if extras.video is not None:
         _headless_pygame()
     answer = run.answer
@@ -373,9 +370,36 @@ def _run_program(
     box = None
     if run.box is not None and extras.scratch is not None:
         from simmer.lockstep.box import Box, make_box
+        from simmer.lockstep.netns import Network
 
-        box = Box(run.box, *make_box(Path(run.folder), extras.scratch))
+        work, tmp = make_box(Path(run.folder), extras.scratch)
+        network = None
+        if run.box.network:  # else, or where it cannot be made: the machine's (said once)
+            opened = Network.open(sim.config.settings.host, [0, 0, 0])
+            if isinstance(opened, str) and sys.platform.startswith("linux"):  # else: said once
+                output.write(f"SimMeR box: no network of its own for this run: {opened}\n")
+            network = opened if isinstance(opened, Network) else None
+        box = Box(run.box, work, tmp, network)
         output.hidden.append(f"{box.work}{os.sep}")  # its traceback names robot.py, not where
+    try:
+        return _serve_program(run, sim, extras, output, answer, box)
+    finally:
+        if box is not None and box.network is not None:
+            box.network.close()
+
+
+def _serve_program(
+    run: RunSpec,
+    sim: Simulation,
+    extras: _Extras,
+    output: _OutputTail,
+    answer: str | None,
+    box: Box | None,
+) -> tuple[RunEnd, dict[str, Any], int | None]:
+    """Serve the run on free ports (a box's own, in its network) and let the program drive it."""
+    from simmer.options import RunOptions
+    from simmer.serve import serve
+
     options = RunOptions.free_ports(
         speed=None,
         clock="lockstep",

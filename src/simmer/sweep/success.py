@@ -41,6 +41,7 @@ OUTCOME_FIELDS = (
     "commands",
     "nan_replies",
     "busy_replies",
+    "over_limit",
     "blocked_moves",
     "final_x",
     "final_y",

@@ -242,6 +242,7 @@ class _Server:
         timeout: float = 300.0,
         idle_timeout: float | None = None,
         clock: ByteCounter | None = None,
+        listeners: list[socket.socket] | None = None,
     ) -> None:
         self.bus = bus
         self.clock = clock
@@ -260,10 +261,11 @@ class _Server:
         self._accept_failing = False
         self._closed = False
         try:
-            for port in ports:
-                listener = socket.create_server((host, port), backlog=128)
+            for port in ports if listeners is None else ():
+                self._listeners.append(socket.create_server((host, port), backlog=128))
+            self._listeners += listeners or []
+            for listener in self._listeners:
                 listener.setblocking(False)
-                self._listeners.append(listener)
         except OSError:
             self.close()
             raise
@@ -468,8 +470,9 @@ class TwoPortServer(_Server):
         timeout: float = 300.0,
         clock: ByteCounter | None = None,
         link_model: Link | None = None,
+        listeners: list[socket.socket] | None = None,
     ) -> None:
-        super().__init__(bus, host, [port_rx, port_tx], timeout, clock=clock)
+        super().__init__(bus, host, [port_rx, port_tx], timeout, clock=clock, listeners=listeners)
         self.link_model = link_model
         """The link model its messages and replies cross (None: off)."""
         if clock is not None:
@@ -713,8 +716,9 @@ class StreamServer(_Server):
         lenient: bool = False,
         clock: ByteCounter | None = None,
         link_model: Link | None = None,
+        listeners: list[socket.socket] | None = None,
     ) -> None:
-        super().__init__(bus, host, [port], timeout, idle_timeout, clock)
+        super().__init__(bus, host, [port], timeout, idle_timeout, clock, listeners)
         self.link_model = link_model
         """The link model its command messages and their replies cross (None: off)."""
         self.port = self.ports[0]

@@ -58,6 +58,8 @@ class Transports:
             )
         codec = config.reply_codec()
         self.protocol = codec.describe()
+        network = options.box.network if options.box is not None else None
+        listening = network.listeners if network is not None else None  # a box's own network
         self.two_port = TwoPortServer(
             bus,
             self.host,
@@ -67,6 +69,7 @@ class Transports:
             timeout=settings.timeout,
             clock=clock,
             link_model=link_model,
+            listeners=listening[:2] if listening else None,
         )
         self.serial: SerialServer | None = None
         self.lidar: RPLidarServer | None = None
@@ -82,6 +85,7 @@ class Transports:
                 lenient=settings.lenient_commands,
                 clock=clock,
                 link_model=link_model,
+                listeners=listening[2:] if listening else None,
             )
             if options.serial or options.serial_link is not None:
                 self.serial = SerialServer(

@@ -72,6 +72,9 @@ class OutcomeReport:
     busy_replies: int = 0
     """Drive commands refused (NaN) because a drive was still moving: a program polling
     ``w0-0`` until its move is done gets these, and nothing is wrong."""
+    over_limit: int = 0
+    """Messages refused whole at a message limit (``MAX_MESSAGE_BYTES``, ``MAX_COMMANDS``):
+    a line without end, a flood of commands in one message. Not in :attr:`messages`."""
     project: ProjectReport | None = None
     """The course project's milestones and score (None unless the robot has a gripper and the
     maze has zones: a Lab 1 run's outcome is as before)."""
@@ -226,6 +229,8 @@ class Outcome:
 
     link_counts: Callable[[], dict[str, float]] | None = None
     """What the run's link model did so far (set by the run that serves a link model)."""
+    over_limit_count: Callable[[], int] | None = None
+    """Messages refused at a message limit so far (set by the run that serves them)."""
 
     def _clear(self) -> None:
         self.first_motion: float | None = None
@@ -417,6 +422,7 @@ class Outcome:
             nan_replies=self.nan_replies,
             final_pose=self.sim.robot.pose,
             busy_replies=self.busy_replies,
+            over_limit=0 if self.over_limit_count is None else self.over_limit_count(),
             project=self.project_report(),
             localization=self.localization.report(),
             link=None if self.link_counts is None else self.link_counts(),
