@@ -41,7 +41,8 @@ def test_show_prints_the_picture_and_draws_it(tmp_path: Path) -> None:
 
 
 def test_generate_writes_the_same_bytes_twice(tmp_path: Path) -> None:
-    first, second = tmp_path / "a.toml", tmp_path / "b.toml"
+    # the second into a folder not made yet, as docs/mazes.md's `-o mazes/m7.toml`
+    first, second = tmp_path / "a.toml", tmp_path / "mazes" / "b.toml"
     for path in (first, second):
         code, text = invoke("generate", "--seed", "7", "--ambiguity", "0.2,0.6", "-o", path)
         assert code == 0, text

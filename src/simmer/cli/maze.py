@@ -174,8 +174,18 @@ def edit(
     invalid maze is not saved: the window says why)."""
     from simmer.config.mazes import course_maze
 
-    maze = _load(str(file)) if file.exists() else course_maze("mie444")
+    new = not file.exists()
+    maze = course_maze("mie444") if new else _load(str(file))
     from simmer.ui.mazeedit import edit_maze
 
-    saved = edit_maze(file, maze)
+    out.print(
+        f"editing {file}{' (a new file: mie444 to start from)' if new else ''} in a window: "
+        "S saves; Esc, closing the window or Ctrl-C here ends",
+        markup=False,
+    )
+    before = None if new else file.stat().st_mtime_ns
+    try:
+        saved = edit_maze(file, maze)
+    except KeyboardInterrupt:  # Ctrl-C in the terminal: as closing the window (S may have saved)
+        saved = file.exists() and file.stat().st_mtime_ns != before
     out.print(f"saved {file}" if saved else f"{file} not saved", markup=False)

@@ -783,8 +783,10 @@ def read_maze(path: str | Path) -> MazeSpec:
 
 
 def write_maze(maze: MazeSpec, path: str | Path, comment: str = "") -> None:
-    """Save a maze: a text picture for .txt or .maze, TOML otherwise."""
+    """Save a maze: a text picture for .txt or .maze, TOML otherwise; its folder is made if
+    missing (``-o mazes/m7.toml`` from a folder with no ``mazes/`` yet, as docs/mazes.md has it)."""
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     text = (
         write_text(maze, comment)
         if path.suffix.lower() in TEXT_SUFFIXES

@@ -236,11 +236,11 @@ class ScenePainter:
         """The trail's ``points`` (world inches; a NaN row splits it) as lines, each piece of
         two points or more (3 px wide at the default 16 ppi, 2 px at least)."""
         width = max(2, round(view.ppi / 6))
-        gaps = np.flatnonzero(np.isnan(points[:, 0]))
-        for piece in np.split(points, gaps):
-            pixels = view.points(piece[~np.isnan(piece[:, 0])])
-            if len(pixels) >= 2:
-                r.draw_lines(pixels, TRAIL_COLOR, width)
+        valid = np.concatenate(([0], ~np.isnan(points[:, 0]), [0])).astype(np.int8)
+        edges = np.flatnonzero(np.diff(valid))  # each piece's first row, and the row after it
+        for start, stop in zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True):
+            if stop - start >= 2:  # a NaN row per point off the rays (_near_shapes): skip them
+                r.draw_lines(view.points(points[start:stop]), TRAIL_COLOR, width)
 
     # ----------------------------------------------------------------- dynamic layer
 
