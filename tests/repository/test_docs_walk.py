@@ -175,14 +175,24 @@ def _free_ports() -> str:
 @contextlib.contextmanager
 def _standard_ports_held() -> Iterator[None]:
     """Another simulator on 61200-61202: listening sockets there (a port already held by
-    something else on this machine is held all the same)."""
+    something else on this machine, the other worker's walk, is held all the same). Once the
+    page is walked, nothing may have connected to the ports held here: every command went to
+    ``SIMMER_PORTS``."""
     with contextlib.ExitStack() as stack:
+        held = []
         for port in STANDARD:
             sock = stack.enter_context(socket.socket())
             with contextlib.suppress(OSError):
                 sock.bind(("127.0.0.1", port))
                 sock.listen()
+                held.append(sock)
         yield
+        for sock in held:
+            sock.setblocking(False)
+            with contextlib.suppress(BlockingIOError):
+                peer, address = sock.accept()
+                peer.close()
+                raise AssertionError(f"a command connected to {sock.getsockname()} from {address}")
 
 
 class Terminal:
