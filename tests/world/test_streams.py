@@ -76,23 +76,3 @@ def test_a_subclass_of_a_built_in_kind_draws_one_value_at_a_time() -> None:
     seen = [mine.gauss(), float(mine.rng.normal(0.0, 2.0)), mine.gauss()]
     stream = sim.stream("device:m0")
     assert seen == [float(stream.normal(0.0, 2.0)) for _ in range(3)]
-
-
-def test_a_fork_stands_where_its_parent_does_and_draws_its_own_noise() -> None:
-    parent, twin_of_parent = make_sim(noisy_data(), seed=5), make_sim(noisy_data(), seed=5)
-    for sim in (parent, twin_of_parent):
-        sim.command("w0-6")
-        sim.step(20)
-    fork = parent.fork(1)
-    assert fork.robot.pose == parent.robot.pose
-    assert fork.steps == parent.steps
-    assert fork.robot.any_drive_moving
-    assert fork.config is parent.config  # the settings are shared, not copied
-    for sim in (fork, parent, twin_of_parent):
-        sim.run_until_idle()
-    mine, its, unforked = readings(fork), readings(parent), readings(twin_of_parent)
-    assert its == unforked  # forking drew nothing from the parent's streams
-    assert mine != its  # the fork's noise is its own
-    assert readings(make_sim(noisy_data(), seed=5).fork(1)) == readings(
-        make_sim(noisy_data(), seed=5).fork(1)
-    )  # and repeatable: the run's seed and the fork's key
