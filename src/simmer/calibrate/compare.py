@@ -18,16 +18,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from simmer.config.models import SimConfig
 from simmer.protocol import parse_message
 from simmer.tap.folder import TapRun
-
-if TYPE_CHECKING:
-    from simmer.world.simulation import Simulation
 
 LEVEL = 0.99
 """The share of the simulator's readings the band holds."""
@@ -109,8 +105,7 @@ def _unit(kind: str) -> str:
 
 
 def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison:
-    """The run's real readings against the band ``config`` predicts over ``seeds`` seeds,
-    the seeds steered by the real readings at each stop (see the module doc)."""
+    """The run's real readings against the band ``config`` predicts over ``seeds`` seeds."""
     from simmer.world.simulation import Simulation
 
     kinds = {spec.id: (spec.group, spec.kind) for spec in config.devices}
@@ -131,48 +126,36 @@ def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison
             elif group == "drives" and command.value != 0.0 and math.isinf(reply):
                 starts = True
         plan.append((index, compared, starts))
-    real = np.array([run.exchanges[i].replies[k] for i, k, _ in places], dtype=float)
-    relative = {d for _, _, d in places if kinds[d][1] in RELATIVE}
-    origin: dict[str, tuple[float, np.ndarray]] = {}
-    """A relative device's first read: the real one and each seed's."""
     simulated = np.empty((seeds, len(places)))
-    sims = [Simulation(config, seed=seed) for seed in range(seeds)]
-    stop: list[int] = []
-    """The columns read since the last motion, which weigh the seeds before the next."""
-    column = 0
-    for index, compared, starts in plan:
-        event = run.exchanges[index]
-        if not compared and not starts:
-            continue  # a poll, or a command refused: nothing the simulator must do
-        if starts and stop:
-            sims, origin = _resample(sims, origin, simulated, real, stop, places, relative)
-            stop = []
-        target = round(event.time * rate)
-        values = np.empty((seeds, len(compared)))
-        for n, sim in enumerate(sims):
+    for seed in range(seeds):
+        sim = Simulation(config, seed=seed)
+        column = 0
+        for index, compared, starts in plan:
+            event = run.exchanges[index]
+            target = round(event.time * rate)
             if target > sim.steps:
                 sim.step(target - sim.steps)
             if starts and sim.robot.any_drive_moving:
                 sim.run_until_idle()
-            replies = sim.command(event.message)
-            values[n] = [replies[k] for k in compared]
-        for j in range(len(compared)):
-            device = places[column][2]
-            got = values[:, j]
-            if device in relative:
-                if device not in origin:
-                    origin[device] = (float(real[column]), got.copy())
-                first_real, first = origin[device]
-                real[column] = (real[column] - first_real + 180.0) % 360.0 - 180.0
-                got = _wrap(got - first)
-            simulated[:, column] = got
-            stop.append(column)
-            column += 1
+            if not compared and not starts:
+                continue  # a poll, or a command refused: nothing the simulator must do
+            values = sim.command(event.message)
+            for k in compared:
+                simulated[seed, column] = values[k]
+                column += 1
+    real = np.array([run.exchanges[i].replies[k] for i, k, _ in places], dtype=float)
+    for device in {d for _, _, d in places if kinds[d][1] in RELATIVE}:
+        columns = [c for c, (_, _, d) in enumerate(places) if d == device]
+        first = columns[0]
+        real[columns] = (real[columns] - real[first] + 180.0) % 360.0 - 180.0
+        simulated[:, columns] = (
+            simulated[:, columns] - simulated[:, [first]] + 180.0
+        ) % 360.0 - 180.0
     tail = (1.0 - LEVEL) / 2 * 100
     low, median, high = np.percentile(simulated, [tail, 50.0, 100.0 - tail], axis=0)
     params = {spec.id: spec.params for spec in config.devices}
     for c, (_, _, device) in enumerate(places):
-        if device in relative:
+        if kinds[device][1] in RELATIVE:
             slack = abs(float(getattr(params[device], "bias", 0.0))) * TIMING_STEPS / rate
             low[c] -= slack
             high[c] += slack
@@ -190,57 +173,8 @@ def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison
         for c, (i, _, device) in enumerate(places)
     ]
     units = {d: _unit(kinds[d][1]) for _, _, d in places}
-    return Comparison(readings, seeds, units, frozenset(relative))
-
-
-def _wrap(degrees: np.ndarray) -> np.ndarray:
-    """Degrees into [-180, 180)."""
-    return (degrees + 180.0) % 360.0 - 180.0
-
-
-def _resample(
-    sims: list[Simulation],
-    origin: dict[str, tuple[float, np.ndarray]],
-    simulated: np.ndarray,
-    real: np.ndarray,
-    stop: list[int],
-    places: list[tuple[int, int, str]],
-    relative: set[str],
-) -> tuple[list[Simulation], dict[str, tuple[float, np.ndarray]]]:
-    """The seeds weighed by how well they explain the stop's real readings, and drawn again
-    by weight (systematic resampling): a seed drawn more than once is forked, its noise its
-    own from here on. Each sensor's weight is its real mean against the seed's mean over the
-    stop, their difference's variance the two spreads over the reads; a sensor read once, or
-    a relative one (a gyroscope: no read noise to scale by), weighs nothing."""
-    count = len(sims)
-    loglik = np.zeros(count)
-    for device in dict.fromkeys(places[c][2] for c in stop):
-        if device in relative:
-            continue
-        columns = [c for c in stop if places[c][2] == device]
-        if len(columns) < 2:
-            continue
-        mine = simulated[:, columns]
-        variance = (np.var(real[columns], ddof=1) + np.mean(np.var(mine, axis=1, ddof=1))) / len(
-            columns
-        )
-        if not variance > 0.0:
-            continue
-        loglik -= 0.5 * (mine.mean(axis=1) - real[columns].mean()) ** 2 / variance
-    weights = np.exp(loglik - loglik.max())
-    weights /= weights.sum()
-    start = np.random.default_rng([count, stop[0]]).random()
-    picks = np.searchsorted(np.cumsum(weights), (start + np.arange(count)) / count)
-    picks = np.minimum(picks, count - 1)
-    taken: set[int] = set()
-    chosen: list[Simulation] = []
-    for n, pick in enumerate(picks):
-        if pick in taken:
-            chosen.append(sims[pick].fork(stop[0] * count + n))
-        else:
-            taken.add(int(pick))
-            chosen.append(sims[pick])
-    return chosen, {d: (first_real, first[picks]) for d, (first_real, first) in origin.items()}
+    relative = frozenset(d for _, _, d in places if kinds[d][1] in RELATIVE)
+    return Comparison(readings, seeds, units, relative)
 
 
 def draw_comparison(comparison: Comparison, target: Path, title: str) -> None:

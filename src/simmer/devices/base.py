@@ -256,13 +256,6 @@ class Device:
             else self.default_outline.copy()
         )
 
-    def reseed(self, rng: np.random.Generator) -> None:
-        """Draw this device's noise from ``rng`` from now on (a forked simulation's copy of
-        the device must not repeat its parent's draws: :meth:`simmer.world.Simulation.fork`)."""
-        self.rng = rng
-        self._gauss_block = []
-        self._gauss_next = 0
-
     def __reduce_ex__(self, protocol: SupportsIndex) -> str | tuple[Any, ...]:
         """Pickle as usual, but an instance of a plug-in's class names the plug-in's file, so
         another process loads it (:mod:`simmer.devices.plugins`)."""

@@ -124,12 +124,6 @@ class Imu(Device):
         self.turn = (math.cos(rad), math.sin(rad))
         """Cosine and sine of the device's rotation on the robot."""
 
-    def reseed(self, rng: np.random.Generator) -> None:
-        """Its read noise and bias walk from ``rng``'s two children, as at the start (the
-        walk's block already drawn, up to :data:`WALK_BLOCK` steps ahead, is kept)."""
-        super().reseed(rng)
-        self.read_rng, self.walk_rng = rng.spawn(2)
-
     def update(self, world: World) -> None:
         """Keep this step's motion and the last one's (what a read needs, and all a step
         costs: the readings are worked out when they are read)."""

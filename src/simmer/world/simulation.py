@@ -147,22 +147,6 @@ class Simulation:
         """
         return source_stream(self.seed, source)
 
-    def fork(self, key: int) -> Simulation:
-        """A copy of this simulation as it stands now whose noise from here on is its own:
-        every device draws from a new stream of the run's seed and ``key``. What a particle
-        filter's resampling needs (:func:`simmer.calibrate.compare.compare`): two copies of one
-        state that then drive and read apart."""
-        import copy
-
-        shared: list[object] = [self.config, self.maze, self.zones, self.scenario]
-        for device in self._robot.devices.values():  # settings shared; noise replaced below
-            shared += [device.params, device.rng, device._gauss_block]
-        twin = copy.deepcopy(self, {id(thing): thing for thing in shared})
-        twin._owner = None
-        for device in twin._robot.devices.values():
-            device.reseed(source_stream(self.seed, f"fork:{key}:device:{device.id}"))
-        return twin
-
     def _build(self) -> None:
         """Create robot, block and devices at their start, each device with a fresh stream."""
         settings = self.config.settings
