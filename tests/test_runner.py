@@ -199,3 +199,39 @@ def test_a_request_carries_its_reasons() -> None:
     assert len(request.reasons) == 1
     assert "no device 'zz'" in request.reasons[0]
     bus.close()
+
+
+@pytest.mark.parametrize("keep_time", [False, True])
+def test_a_held_up_loop_drops_its_backlog_unless_it_keeps_time(
+    monkeypatch: pytest.MonkeyPatch, keep_time: bool
+) -> None:
+    """The window's loop drops a backlog past MAX_LAG (no racing to catch up); the
+    ground-truth robot's (keep_time) catches up, so its clock stays the wall clock."""
+    import types
+
+    import simmer.runner
+
+    sim = Simulation(load_config(), seed=1)
+    wall = [0.0]
+    looks = [0]
+    """Looks at the clock since the loop was held up (-1: not yet)."""
+    looks[0] = -1
+
+    def monotonic() -> float:
+        """10 ms a look; at 0.5 s, the loop held up 1 s; then 200 quick looks (catching up
+        costs only steps)."""
+        if looks[0] < 0 and sim.time >= 0.5:
+            looks[0] = 0
+            wall[0] += 1.0
+        quick = 0 <= looks[0] < 200
+        looks[0] += looks[0] >= 0
+        wall[0] += 0.001 if quick else 0.01
+        return wall[0]
+
+    monkeypatch.setattr(simmer.runner, "time", types.SimpleNamespace(monotonic=monotonic))
+    Runner(sim, speed=1.0, keep_time=keep_time).run(until=2.0)
+    behind = wall[0] - sim.time
+    if keep_time:
+        assert behind < 0.1
+    else:
+        assert 0.7 < behind < 1.1  # the second held up, less MAX_LAG, is lost

@@ -25,7 +25,9 @@ def test_one_hidden_robot_behind_the_tap_is_recovered(
     result = trial(11, tmp_path / "trial", load_config(), seeds=100)  # fewer: a thin 99% band
     missed = [key for key, covered in result.covered.items() if not covered]
     assert len(missed) <= 1, missed
-    # The issue asks 95%; this trial gives 94.5% to 97% from run to run on a loaded machine
-    # (the CHANGELOG's figures): not yet met, so this holds the floor the runs reach.
-    assert result.inside >= 0.90
+    # The issue asks 95%. With the robot keeping the wall clock (a loaded machine's stall no
+    # longer leaves its gyroscope's readings behind the tap's times) this trial gives 94.5%
+    # to 97% from run to run: whole stops after a turn land outside together, even with the
+    # hidden settings (96.1% in one run). Not yet met; this holds the floor the runs reach.
+    assert result.inside >= 0.93
     assert (tmp_path / "trial" / "run" / "exchanges.csv").exists()

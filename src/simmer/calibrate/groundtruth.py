@@ -101,7 +101,7 @@ def trial(number: int, folder: Path, base: SimConfig, seeds: int = 100) -> Trial
     folder.mkdir(parents=True)
     program = folder / "calibration_routine.py"
     program.write_text(routine_program(team, plan(team)))
-    runner = Runner(robot, speed=1.0)
+    runner = Runner(robot, speed=1.0, keep_time=True)  # a real robot's clock never skips
     stop = threading.Event()
     link = Transports(runner.bus, robot.config, RunOptions.free_ports(serial=True))
     with link:

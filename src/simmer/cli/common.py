@@ -102,21 +102,28 @@ def simulation(config: Path | None) -> Simulation:
         raise typer.Exit(1) from None
 
 
-def refuse_tap_folder(folder: Path, doing: str) -> None:
-    """One plain line and exit status 1 if ``folder`` is a tap's run of the real robot, which
-    has no true pose to ``doing`` (``simmer compare`` draws its readings instead)."""
+def is_tap_run(folder: Path) -> bool:
+    """Whether ``folder`` is a tap's run of the real robot (no true pose: ``simmer plot``
+    draws its traffic instead of a path); False if its manifest cannot be read here (the
+    command's own reading says why)."""
     from simmer.record.runfolder import MANIFEST, read_json
     from simmer.tap.folder import is_tap_folder
 
     try:
         head = read_json(folder / MANIFEST)  # bounded: the folder is untrusted data
     except (OSError, ValueError):
-        return  # not readable here: the command's own reading says why
-    if is_tap_folder(head):
+        return False
+    return is_tap_folder(head)
+
+
+def refuse_tap_folder(folder: Path, doing: str) -> None:
+    """One plain line and exit status 1 if ``folder`` is a tap's run of the real robot, which
+    has no pose to ``doing``: ``simmer plot`` draws what it recorded, over time."""
+    if is_tap_run(folder):
         err.print(
-            f"{folder} is a tap's run of the real robot: it has no true pose to {doing}; "
-            f"simmer compare {folder} --config CONFIG draws its readings against the "
-            "simulator's (docs/calibration.md)",
+            f"{folder} is a tap's run of the real robot: it has no pose to {doing}; "
+            f"simmer plot {folder} draws its commands and readings over time (timeline.png), "
+            f"simmer compare {folder} --config CONFIG against the simulator's",
             style="bold red",
             markup=False,
         )
