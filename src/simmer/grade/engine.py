@@ -4,7 +4,6 @@ log, a thumbnail per team and the failure videos."""
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -13,16 +12,9 @@ from typing import TYPE_CHECKING
 from simmer.ending import RunEnd
 from simmer.grade.board import Standing, write_board
 from simmer.grade.spec import GradeSpec
-from simmer.sweep.engine import (
-    Engine,
-    _execute_all,
-    _Pool,
-    _progress,
-    _stopped_by_signals,
-    local_pool,
-)
-from simmer.sweep.results import ResultsFile, keep_files, read_rows, row
-from simmer.sweep.runs import RunResult, RunSpec, execute, film
+from simmer.sweep.engine import Engine, Table, _execute_all, _Pool, run_table, to_film
+from simmer.sweep.results import read_rows
+from simmer.sweep.runs import RunResult, RunSpec, film
 from simmer.sweep.success import OUTCOME_FIELDS, PROJECT_FIELDS
 
 if TYPE_CHECKING:
@@ -74,43 +66,20 @@ def run_grading(
     started = time.perf_counter()
     notes = box_notes(spec)
     runs = spec.runs()
-    names = spec.folder_names()
-    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
-    try:
-        pool.executor()
-        results = ResultsFile(folder / "results.csv", grade_columns(spec), resume=resume)
-    except BaseException:
-        pool.close(cancel=True)
-        raise
-    todo = [run for run in runs if run.key() not in results.done]
-    with _stopped_by_signals(pool):
-        try:
-            with _progress(console, "grading", len(runs), len(runs) - len(todo)) as advance:
-
-                def record(run: RunSpec, result: RunResult) -> None:
-                    if result.status in STOPPED_AT_LIMIT:  # what it printed as it was stopped
-                        result = replace(result, detail="")  # depends on timing: not kept
-                    kept = (
-                        keep_files(folder, names[run.key()], result.files) if result.files else ""
-                    )
-                    results.add(row(run, result, kept, spec.project))
-                    advance(None)
-
-                try:
-                    _execute_all(todo, pool, execute, record)
-                finally:
-                    complete = all(run.key() in results.done for run in runs)
-                    results.close([run.key() for run in runs] if complete else None)
-            filmed = _film(spec, runs, folder, pool)
-        except BaseException:
-            pool.close(cancel=True)
-            raise
-        pool.close()
+    ran, _successes, filmed = run_table(
+        runs,
+        Table(folder, grade_columns(spec), spec.folder_names(), spec.project, _untimed),
+        lambda pool: _film(spec, runs, folder, pool),
+        engine=engine,
+        workers=workers,
+        resume=resume,
+        progress=(console, "grading", False),
+    )
     rows = read_rows(folder / "results.csv")
     thumbnails = _thumbnails(spec, folder, rows)
     table = write_board(folder, spec, rows, source, thumbnails, notes)
     wall = time.perf_counter() - started
-    return GradeResult(folder, len(runs), len(todo), table, wall, filmed, notes)
+    return GradeResult(folder, len(runs), ran, table, wall, filmed, notes)
 
 
 def box_notes(spec: GradeSpec) -> tuple[str, ...]:
@@ -128,27 +97,22 @@ def box_notes(spec: GradeSpec) -> tuple[str, ...]:
     )
 
 
+def _untimed(result: RunResult) -> RunResult:
+    """A result without what its program printed as it was stopped at a limit (it depends on
+    timing: the same grading would not give the same table)."""
+    return replace(result, detail="") if result.status in STOPPED_AT_LIMIT else result
+
+
 def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: _Pool) -> int:
     """Film each team's first ``spec.videos`` failures that have a folder and no video yet."""
     if not spec.videos:
         return 0
     by_key = {r["run"]: r for r in read_rows(folder / "results.csv")}
-    todo: list[RunSpec] = []
-    for team in spec.teams:
-        failures = [
-            run
-            for run in runs
-            if run.team == team.name
-            and (r := by_key.get(run.key())) is not None
-            and r["failure"]
-            and r["folder"]
-            and r["status"] not in (RunEnd.CRASHED, RunEnd.INVALID)
-        ]
-        todo += [
-            run
-            for run in failures[: spec.videos]
-            if not (folder / by_key[run.key()]["folder"] / "video.mp4").exists()
-        ]
+    todo = [
+        run
+        for team in spec.teams
+        for run in to_film([r for r in runs if r.team == team.name], by_key, folder, spec.videos)
+    ]
 
     def record(run: RunSpec, result: RunResult) -> None:
         if "video.mp4" in result.files:

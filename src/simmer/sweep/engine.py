@@ -349,11 +349,56 @@ def run_sweep(
     started = time.perf_counter()
     spec.check_settings()
     runs = spec.runs()
-    names = spec.folder_names(runs)
+    table = Table(folder, header(spec), spec.folder_names(runs), spec.project)
+    ran, successes, (filmed, remarks) = run_table(
+        runs,
+        table,
+        lambda pool: _film_failures(spec, runs, folder, pool, console),
+        engine=engine,
+        workers=workers,
+        resume=resume,
+        progress=(console, "sweep", True),
+    )
+    from simmer.sweep.pictures import draw_pictures
+
+    write_summary(folder, spec, source, draw_pictures, remarks)
+    elapsed = time.perf_counter() - started
+    return SweepResult(folder, len(runs), ran, successes, elapsed, filmed)
+
+
+@dataclass(frozen=True)
+class Table:
+    """Where a sweep's or a grading's runs go: ``folder``/results.csv with ``columns``, each
+    kept run's files under its name in ``names`` (by run key); ``project``: the rows carry
+    the project's fields; ``prepare``: what is done to a result before its row is written."""
+
+    folder: Path
+    columns: list[str]
+    names: dict[str, str]
+    project: bool
+    prepare: Callable[[RunResult], RunResult] = lambda result: result
+
+
+def run_table(
+    runs: list[RunSpec],
+    table: Table,
+    then: Callable[[_Pool], T],
+    *,
+    engine: Engine | None,
+    workers: int | None,
+    resume: bool,
+    progress: tuple[Console | None, str, bool],
+) -> tuple[int, int, T]:
+    """Run every run not yet in the table (``resume``) on the engine, appending each row and
+    keeping its files as it finishes, with a progress bar (console, label, whether it shows
+    the successes); close results.csv in the runs' order once every run is in it; then
+    ``then(pool)`` on the same pool. Signals stop it all cleanly (:func:`_stopped_by_signals`).
+    Returns the runs carried out now, the successes in the whole table, and what ``then`` gave."""
+    console, label, show_successes = progress
     pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
     try:
         pool.executor()  # a refused cluster (DASK_WORKER_THREADS) leaves no results.csv
-        results = ResultsFile(folder / "results.csv", header(spec), resume=resume)
+        results = ResultsFile(table.folder / "results.csv", table.columns, resume=resume)
     except BaseException:
         pool.close(cancel=True)
         raise
@@ -362,40 +407,35 @@ def run_sweep(
     successes = sum(cells[success_column] == "True" for cells in results.done.values())
     with _stopped_by_signals(pool):
         try:
-            with _progress(console, "sweep", len(runs), len(runs) - len(todo)) as advance:
+            with _progress(console, label, len(runs), len(runs) - len(todo)) as advance:
 
                 def record(run: RunSpec, result: RunResult) -> None:
                     nonlocal successes
                     successes += result.success
-                    kept = (
-                        keep_files(folder, names[run.key()], result.files) if result.files else ""
-                    )
-                    results.add(row(run, result, kept, spec.project))
-                    advance(successes)
+                    result = table.prepare(result)
+                    name = table.names[run.key()]
+                    kept = keep_files(table.folder, name, result.files) if result.files else ""
+                    results.add(row(run, result, kept, table.project))
+                    advance(successes if show_successes else None)
 
                 try:
                     _execute_all(todo, pool, execute, record)
                 finally:
                     complete = all(run.key() in results.done for run in runs)
                     results.close([run.key() for run in runs] if complete else None)
-            filmed, remarks = _film_failures(spec, runs, folder, pool, console)
+            after = then(pool)
         except BaseException:
             pool.close(cancel=True)
             raise
         pool.close()
-    from simmer.sweep.pictures import draw_pictures
-
-    write_summary(folder, spec, source, draw_pictures, remarks)
-    elapsed = time.perf_counter() - started
-    return SweepResult(folder, len(runs), len(todo), successes, elapsed, filmed)
+    return len(todo), successes, after
 
 
-def _film_failures(
-    spec: SweepSpec, runs: list[RunSpec], folder: Path, pool: _Pool, console: Console | None
-) -> tuple[int, list[str]]:
-    """Film the first ``spec.videos`` failures in the sweep's order that had a simulation and
-    have no video yet, into their run folders; how many, and remarks for the summary."""
-    by_key = {r["run"]: r for r in read_rows(folder / "results.csv")}
+def to_film(
+    runs: list[RunSpec], by_key: dict[str, dict[str, str]], folder: Path, count: int
+) -> list[RunSpec]:
+    """The first ``count`` failures among ``runs`` (rows of results.csv ``by_key``) that had a
+    simulation and kept a folder, less those filmed already (a video in the folder)."""
     failures = [
         run
         for run in runs
@@ -404,11 +444,20 @@ def _film_failures(
         and r["folder"]
         and r["status"] not in (RunEnd.CRASHED, RunEnd.INVALID)  # no simulation to film
     ]
-    todo = [
+    return [
         run
-        for run in failures[: spec.videos]
+        for run in failures[:count]
         if not (folder / by_key[run.key()]["folder"] / "video.mp4").exists()
     ]
+
+
+def _film_failures(
+    spec: SweepSpec, runs: list[RunSpec], folder: Path, pool: _Pool, console: Console | None
+) -> tuple[int, list[str]]:
+    """Film the first ``spec.videos`` failures in the sweep's order that had a simulation and
+    have no video yet, into their run folders; how many, and remarks for the summary."""
+    by_key = {r["run"]: r for r in read_rows(folder / "results.csv")}
+    todo = to_film(runs, by_key, folder, spec.videos)
     remarks: list[str] = []
     if not todo:
         return 0, remarks
