@@ -129,8 +129,8 @@ def main() -> dict[str, float]:
         f"included: {us['ray'] * 1e3 / 7:.0f} ns)"
     )
     print(
-        f"  with the A1M8's noise drawn: {us['noisy']:.1f} us, of which the draws (720 normals, "
-        f"360 uniforms, drawn {NOISE_SCANS} revolutions at once) {us['draws']:.1f} us"
+        f"  with the A1M8's noise drawn: {us['noisy']:.1f} us, of which the 720 normals (drawn "
+        f"{NOISE_SCANS} revolutions at once) {us['draws']:.1f} us"
     )
     count = 2000
     steps = in_turns(step_runs(count), 1)

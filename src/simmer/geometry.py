@@ -439,7 +439,7 @@ def scan_revolution(
     offsets: FloatArray,
     vectors: FloatArray,
     normals: FloatArray,
-    uniforms: FloatArray,
+    gaps: FloatArray,
     beam_poses: FloatArray,
     true: FloatArray,
     distances: FloatArray,
@@ -453,21 +453,24 @@ def scan_revolution(
     beam's unit vector at heading 0, the mount's rotation included) turned by the pose's
     heading, then the noise. ``state``: cell, see_block, heading_now, start, end, skew, px, py,
     min_range, max_range, range_error, range_error_proportional, dropout, angular_jitter
-    (radians), then where this revolution's draws start: the jitter's and the range error's
-    standard normals in ``normals`` and the dropout's uniforms in ``uniforms`` (-1: that noise
-    is off). Fills ``beam_poses``, ``true`` (noise-free distance of the jittered beam, inf: no
-    hit), ``distances`` (0: no return) and ``points`` (where each beam met something, NaN
-    where it returned nothing); returns the index of the last pose at or before ``end`` (the
+    (radians), where this revolution's standard normals start in ``normals``, the jitter's and
+    the range error's (-1: that noise is off), and the dropout's place in ``gaps`` (the beams
+    from one dropped beam to the next, geometric draws): the next gap's index (-1: no dropout)
+    and the beams to pass before the next dropped one, both updated. Fills ``beam_poses``,
+    ``true`` (noise-free distance of the jittered beam, inf: no hit), ``distances`` (0: no
+    return) and ``points`` (where each beam met something, NaN where it returned nothing);
+    returns the index of the last pose at or before ``end`` (the
     poses before it are no longer needed).
 
     Speed (a 360-beam scan is some microseconds): one sine and cosine a pose heading (a robot
     not turning has one heading all revolution), none a beam (its vector is turned; its
-    jitter by a series), and one compiled call a scan with few arguments."""
+    jitter by a series), a draw a dropped beam (not a uniform a beam), and one compiled call
+    a scan with few arguments."""
     cell, see_block, heading_now = state[0], state[1] != 0.0, state[2]
     start, end, skew = state[3], state[4], state[5] != 0.0
     px, py, low, high = state[6], state[7], state[8], state[9]
-    const, prop, dropout, jitter = state[10], state[11], state[12], state[13]
-    jn, rn, un = int(state[14]), int(state[15]), int(state[16])
+    const, prop, jitter = state[10], state[11], state[13]
+    jn, rn, gap, left = int(state[14]), int(state[15]), int(state[16]), state[17]
     n = true.shape[0]
     m = track.shape[0] // 4
     last = track[4 * m - 1]
@@ -520,7 +523,15 @@ def scan_revolution(
         true[k] = d
         if d != math.inf and rn >= 0:
             d = d + (const + prop * d) * normals[rn + k]
-        if d == math.inf or d < low or d > high or (un >= 0 and uniforms[un + k] < dropout):
+        dropped = False
+        if gap >= 0:  # one draw a dropped beam, not one a beam
+            if left == 0.0:
+                dropped = True
+                left = gaps[gap] - 1.0
+                gap += 1
+            else:
+                left -= 1.0
+        if d == math.inf or d < low or d > high or dropped:
             distances[k] = 0.0
             points[k, 0] = math.nan
             points[k, 1] = math.nan
@@ -528,4 +539,7 @@ def scan_revolution(
             distances[k] = d
             points[k, 0] = ox + dx * d
             points[k, 1] = oy + dy * d
+    if gap >= 0:
+        state[16] = gap
+        state[17] = left
     return kept

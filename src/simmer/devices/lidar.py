@@ -165,9 +165,10 @@ class Lidar(Device):
                 params.range_error_proportional,
                 params.dropout,
                 math.radians(params.angular_jitter),
-                -1.0,  # where this revolution's draws start (-1: that noise is off)
+                -1.0,  # where this revolution's normals start (-1: that noise is off)
                 -1.0,
-                -1.0,
+                -1.0,  # the next gap between dropped beams; the beams before the next drop
+                0.0,
             ]
         )
         """:func:`~simmer.geometry.scan_revolution`'s numbers, in one array (each argument of
@@ -178,10 +179,12 @@ class Lidar(Device):
         error."""
         rows = sum(self._rows)
         self._normals = np.zeros(NOISE_SCANS * rows * n if rows else 1)
-        self._uniforms = np.zeros(NOISE_SCANS * n if params.dropout else 1)
-        """The noise of NOISE_SCANS revolutions, drawn at once from the device's stream (the
-        normals, then the uniforms against the dropout chance): NumPy's call costs as much as
-        a few hundred of its draws."""
+        """The normals of NOISE_SCANS revolutions, drawn at once from the device's stream:
+        NumPy's call costs as much as a few hundred of its draws."""
+        self._gaps = np.zeros(NOISE_SCANS * n if params.dropout else 1)
+        """The beams from one dropped beam to the next (geometric draws, the chance
+        ``dropout``: each beam dropped independently, as a uniform draw a beam would make it,
+        for a draw a dropped beam), drawn when fewer than a revolution's beams are left."""
         self._drawn = NOISE_SCANS
         """Revolutions of the drawn noise used (NOISE_SCANS: none left)."""
         self._due = self.period - 1e-9
@@ -254,8 +257,13 @@ class Lidar(Device):
             first = used * (jitter + ranged) * n
             state[14] = first if jitter else -1.0
             state[15] = first + jitter * n if ranged else -1.0
-        if self.settings.dropout:
-            state[16] = used * n
+        if self.settings.dropout and not 0.0 <= state[16] <= len(self._gaps) - n:
+            self._gaps[:] = self.rng.geometric(self.settings.dropout, len(self._gaps))
+            if state[16] < 0.0:  # the first: the beams before the first drop
+                state[17] = self._gaps[0] - 1.0
+                state[16] = 1.0
+            else:
+                state[16] = 0.0
         maze = world.maze
         state[0] = maze.cell
         state[1] = self.sees_block(world)
@@ -273,7 +281,7 @@ class Lidar(Device):
             self._offsets,
             self.vectors,
             self._normals,
-            self._uniforms,
+            self._gaps,
             self._beam_poses,
             self._true,
             self.distances,
@@ -285,12 +293,9 @@ class Lidar(Device):
         return kept
 
     def _draw(self) -> None:
-        """Draw the next NOISE_SCANS revolutions' noise: the normals, then the uniforms (only
-        the noise configured; a fixed order, so the same seed gives the same scans)."""
+        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured)."""
         if any(self._rows):
             self.rng.standard_normal(out=self._normals)
-        if self.settings.dropout:
-            self.rng.random(out=self._uniforms)
         self._drawn = 0
 
     # -- reading -------------------------------------------------------------------------
