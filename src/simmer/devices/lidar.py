@@ -276,7 +276,7 @@ class Lidar(Device):
             maze.vwall,
             maze.segments,
             world.block.segments,
-            np.array(self._track),
+            np.array(self._track, dtype=np.float64),  # the dtype given: twice as fast
             state,
             self._offsets,
             self.vectors,
