@@ -62,8 +62,9 @@ def in_turns(runs: dict[str, Callable[[], object]], count: int) -> dict[str, flo
 
 def scan_runs() -> dict[str, Callable[[], object]]:
     """One whole 360-beam scan as the device makes it at the rover's start (the poses, the
-    beams cast, the noise applied): noise off, and with the A1M8's noise drawn; the noise
-    draws alone; one ray of the rover's front ultrasonic fan (7 rays a read, the Python call
+    beams cast, the noise applied): noise off, and with the A1M8's noise drawn; the normals'
+    draws alone (NOISE_SCANS revolutions' at once; the dropout's few geometric draws left out);
+    one ray of the rover's front ultrasonic fan (7 rays a read, the Python call
     included), for comparison: the LiDAR's beams walk the same grid."""
     runs: dict[str, Callable[[], object]] = {}
     for name, settings in (("quiet", QUIET), ("noisy", {})):

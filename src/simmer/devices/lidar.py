@@ -12,8 +12,8 @@ is (``motion_skew``; off: the whole scan from the pose at its end). A read answe
 latest complete scan; before the first revolution ends that is the scan the spinning LiDAR
 made at the start pose before the run began.
 
-Noise, each from the device's own seeded stream, drawn in a fixed order NOISE_SCANS revolutions
-at a time:
+Noise, each from the device's own seeded stream in a fixed order (the normals NOISE_SCANS
+revolutions at a time, the dropout as the gaps between dropped beams):
 ``range_error + range_error_proportional · d`` inches standard deviation on a distance ``d``
 (Stage's ranger model), ``angular_jitter`` degrees standard deviation on each beam's true
 direction (the angle reported stays the nominal one), and ``dropout``, the chance a beam
