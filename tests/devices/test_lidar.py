@@ -179,8 +179,13 @@ def test_noise_statistics_over_100000_beams_match_the_settings() -> None:
     truth = sim.expected(np.array([sim.robot.pose]), ["l0"])[0]
     valid = truth > 5.9 + 1.0  # far from min_range, where noise would cut one tail off
     residuals, zeros, beams = [], 0, 0
+    both, pairs = 0, 0  # beams next to each other, both valid: both dropped
+    paired = valid & np.roll(valid, -1)
     while beams < 100_000:
         next_scan(sim, device)
+        dropped = device.distances == 0.0
+        both += int((dropped & np.roll(dropped, -1))[paired].sum())
+        pairs += int(paired.sum())
         got = device.distances[valid]
         zeros += int((got == 0.0).sum())
         beams += got.size
@@ -192,6 +197,9 @@ def test_noise_statistics_over_100000_beams_match_the_settings() -> None:
     assert abs(z.std() - 1.0) < 4 / math.sqrt(2 * z.size)
     rate = zeros / beams
     assert abs(rate - drop) < 4 * math.sqrt(drop * (1 - drop) / beams)
+    # Each beam dropped independently (drops drawn as the gaps between them): two neighbours
+    # both dropped at the chance squared.
+    assert abs(both / pairs - drop**2) < 4 * math.sqrt(drop**2 / pairs)
 
 
 def test_angular_jitter_moves_beams_by_its_sd() -> None:

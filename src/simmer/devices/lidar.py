@@ -12,7 +12,8 @@ is (``motion_skew``; off: the whole scan from the pose at its end). A read answe
 latest complete scan; before the first revolution ends that is the scan the spinning LiDAR
 made at the start pose before the run began.
 
-Noise, each from the device's own seeded stream and drawn in a fixed order per scan:
+Noise, each from the device's own seeded stream in a fixed order (the normals NOISE_SCANS
+revolutions at a time, the dropout as the gaps between dropped beams):
 ``range_error + range_error_proportional · d`` inches standard deviation on a distance ``d``
 (Stage's ranger model), ``angular_jitter`` degrees standard deviation on each beam's true
 direction (the angle reported stays the nominal one), and ``dropout``, the chance a beam
@@ -28,7 +29,6 @@ whole scan consistently: ``simmer.client.Client.scan``.
 
 from __future__ import annotations
 
-import bisect
 import math
 from typing import ClassVar
 
@@ -43,10 +43,19 @@ from simmer.geometry import FloatArray, Vec2, rectangle, scan_revolution
 MAX_BEAMS = 999
 """Most beams per revolution: a whole scan is read in one message of a command per beam plus
 the scan number, within the protocol's 1,000 commands (``MAX_COMMANDS``)."""
+NOISE_SCANS = 16
+"""Revolutions whose noise a LiDAR draws at once (each a NumPy call for all of them)."""
 BEAMS_READ = -1.0
 """``l0--1``: the beams per revolution."""
 SCAN_NUMBER_READ = -2.0
 """``l0--2``: the number of the scan that answers."""
+
+
+def beam_vectors(directions: FloatArray, rotation: float) -> FloatArray:
+    """Unit vectors (2, N: x row, y row) of beams at ``directions`` degrees clockwise from a
+    front turned ``rotation`` degrees from the robot's, at robot heading 0."""
+    angle = np.radians(rotation + directions)
+    return np.vstack((-np.sin(angle), np.cos(angle)))
 
 
 class LidarParams(MeasuredParams):
@@ -129,37 +138,55 @@ class Lidar(Device):
         """The latest scan's number: 1 the one made at the start pose, then one a revolution."""
         self.scan_time = 0.0
         """When the latest scan ended, simulated seconds."""
-        self._times: list[float] = []
-        """When each pose of ``_poses`` was recorded: the revolution under way's steps."""
-        self._poses: list[float] = []
-        """The robot's poses at ``_times``, flat (x, y, heading unwrapped, x, ...): a list
-        appended to each step and made an array once a scan, the cheapest way per step."""
-        self._true = np.empty(n)
+        self.vectors = beam_vectors(self.directions, self.rotation)
+        """Each beam's unit vector (2, beams: x row, y row) at robot heading 0, the mount's
+        rotation included: a scan turns them by the robot's heading."""
+        self._track: list[float] = []
+        """The revolution under way's steps, flat (time, x, y, heading unwrapped, time, ...):
+        a list appended to each step and made an array once a scan, the cheapest way per
+        step."""
         self._beam_poses = np.empty((n, 3))
-        self._noise = np.zeros((3, n))
-        """Each scan's draws: beams' direction and range errors in standard deviations, and
-        uniform draws against the dropout chance (rows left 0 when their noise is off)."""
-        jitter, ranged = (
-            params.angular_jitter,
-            params.range_error or params.range_error_proportional,
-        )
-        rows = slice(0 if jitter else 1, 2 if ranged else 1)
-        self._normals = self._noise[rows] if rows.start < rows.stop else None
-        """The rows of ``_noise`` drawn as standard normals, in one call (the stream's order
-        as drawing each row alone)."""
-        self._uniforms = self._noise[2] if params.dropout else None
+        self._true = np.empty(n)
         self._offsets = self.period * (np.arange(n) / n)
         """When each beam is measured after its revolution starts, seconds."""
-        self._limits = np.array(
+        self._state = np.array(
             [
+                0.0,  # the maze's cell, the block seen, the heading now, start, end, skew:
+                0.0,  # set each scan
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                self.position.x,
+                self.position.y,
                 params.min_range,
                 params.max_range,
                 params.range_error,
                 params.range_error_proportional,
                 params.dropout,
-                params.angular_jitter,
+                math.radians(params.angular_jitter),
+                -1.0,  # where this revolution's normals start (-1: that noise is off)
+                -1.0,
+                -1.0,  # the next gap between dropped beams; the beams before the next drop
+                0.0,
             ]
         )
+        """:func:`~simmer.geometry.scan_revolution`'s numbers, in one array (each argument of
+        a compiled call costs)."""
+        ranged = bool(params.range_error or params.range_error_proportional)
+        self._rows = (bool(params.angular_jitter), ranged)
+        """Which rows of standard normals a revolution draws: its beams' jitter, their range
+        error."""
+        rows = sum(self._rows)
+        self._normals = np.zeros(NOISE_SCANS * rows * n if rows else 1)
+        """The normals of NOISE_SCANS revolutions, drawn at once from the device's stream:
+        NumPy's call costs as much as a few hundred of its draws."""
+        self._gaps = np.zeros(NOISE_SCANS * n if params.dropout else 1)
+        """The beams from one dropped beam to the next (geometric draws, the chance
+        ``dropout``: each beam dropped independently, as a uniform draw a beam would make it,
+        for a draw a dropped beam), drawn when fewer than a revolution's beams are left."""
+        self._drawn = NOISE_SCANS
+        """Revolutions of the drawn noise used (NOISE_SCANS: none left)."""
         self._due = self.period - 1e-9
         """When the revolution under way ends (a hair early: steps' times are sums)."""
         self._heading = 0.0
@@ -183,20 +210,17 @@ class Lidar(Device):
         first scan (at the start pose) if none is made yet; the time now. Called every step:
         kept lean (a step without a scan costs the LiDAR a few tenths of a microsecond)."""
         now = world.time
-        times = self._times
-        if not times:
+        track = self._track
+        if not track:
             self._first(world)
-        if now <= times[-1]:
+        if now <= track[-4]:
             return now
-        pose = world.robot.pose
-        heading = pose.heading
-        poses = self._poses
-        last = poses[-1]
-        times.append(now)
+        x, y, heading = world.robot.pose
+        last = track[-1]
         if -180.0 < last - heading < 180.0:  # within a half turn of the last: as it is
-            poses.extend(pose)
+            track += (now, x, y, heading)
         else:
-            poses += (pose.x, pose.y, heading + 360.0 * round((last - heading) / 360.0))
+            track += (now, x, y, heading + 360.0 * round((last - heading) / 360.0))
         self._heading = heading
         return now
 
@@ -204,8 +228,7 @@ class Lidar(Device):
         """The first pose recorded and the scan the spinning LiDAR made there before the run
         began (the start pose's, if the run has begun)."""
         start = world.robot.start_pose if world.time > 0.0 else world.robot.pose
-        self._times.append(0.0)
-        self._poses += (start.x, start.y, start.heading)
+        self._track += (0.0, start.x, start.y, start.heading)
         self._heading = start.heading
         self._scan(world, 0.0, skew=False)
 
@@ -214,39 +237,51 @@ class Lidar(Device):
         now = self._record(world)
         if now < self._due:
             return
+        kept = 0
         while now >= self._due:
-            self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
-        # drop the poses before the revolution under way (the one before it stays)
-        keep = bisect.bisect_right(self._times, self.scan_time) - 1
-        if keep > 0:
-            del self._times[:keep], self._poses[: 3 * keep]
+            kept = self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
+        if kept:  # drop the poses before the revolution under way (the one before it stays)
+            del self._track[: 4 * kept]
 
-    def _scan(self, world: World, end: float, *, skew: bool) -> None:
-        """Cast the revolution ending at ``end`` and draw its noise (see the module doc)."""
-        noise = self._noise
-        if self._normals is not None:
-            self.rng.standard_normal(out=self._normals)
-        if self._uniforms is not None:
-            self.rng.random(out=self._uniforms)
+    def _scan(self, world: World, end: float, *, skew: bool) -> int:
+        """Cast the revolution ending at ``end`` and apply its noise (see the module doc); the
+        poses no longer needed (:func:`~simmer.geometry.scan_revolution`)."""
+        state = self._state
+        n = self.settings.beams
+        if self._drawn == NOISE_SCANS:
+            self._draw()
+        used = self._drawn
+        self._drawn = used + 1
+        jitter, ranged = self._rows
+        if jitter or ranged:
+            first = used * (jitter + ranged) * n
+            state[14] = first if jitter else -1.0
+            state[15] = first + jitter * n if ranged else -1.0
+        if self.settings.dropout and not 0.0 <= state[16] <= len(self._gaps) - n:
+            self._gaps[:] = self.rng.geometric(self.settings.dropout, len(self._gaps))
+            if state[16] < 0.0:  # the first: the beams before the first drop
+                state[17] = self._gaps[0] - 1.0
+                state[16] = 1.0
+            else:
+                state[16] = 0.0
         maze = world.maze
-        scan_revolution(
+        state[0] = maze.cell
+        state[1] = self.sees_block(world)
+        state[2] = self._heading
+        state[3] = end - self.period
+        state[4] = end
+        state[5] = skew
+        kept: int = scan_revolution(
             maze.hwall,
             maze.vwall,
-            maze.cell,
             maze.segments,
             world.block.segments,
-            self.sees_block(world),
-            np.array(self._times),
-            np.array(self._poses).reshape(-1, 3),
-            self._heading,
-            end - self.period,
-            end,
-            skew,
+            np.array(self._track, dtype=np.float64),  # the dtype given: twice as fast
+            state,
             self._offsets,
-            self.mount,
-            self.directions,
-            self._limits,
-            noise,
+            self.vectors,
+            self._normals,
+            self._gaps,
             self._beam_poses,
             self._true,
             self.distances,
@@ -255,6 +290,13 @@ class Lidar(Device):
         self.number += 1
         self.scan_time = end
         self._due = end + self.period - 1e-9
+        return kept
+
+    def _draw(self) -> None:
+        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured)."""
+        if any(self._rows):
+            self.rng.standard_normal(out=self._normals)
+        self._drawn = 0
 
     # -- reading -------------------------------------------------------------------------
 

@@ -17,14 +17,15 @@ from typing import TYPE_CHECKING, Any
 import numba
 import numpy as np
 
-from simmer.devices.lidar import Lidar
+from simmer.devices.lidar import Lidar, beam_vectors
 from simmer.devices.sensors import _DISK, Compass, Infrared, Ultrasonic
 from simmer.devices.tof import MM_PER_INCH, TimeOfFlight
 from simmer.geometry import (
     BoolArray,
     FloatArray,
-    cast_beam,
     cast_fan,
+    ray_grid,
+    ray_segments,
     white_fraction,
     wrap_degrees,
 )
@@ -117,36 +118,31 @@ def _scans(
     see_block: bool,
     poses: FloatArray,
     mount: FloatArray,
-    directions: FloatArray,
+    vectors: FloatArray,
     low: float,
     high: float,
     out: FloatArray,
 ) -> None:
     """Fill ``out[i, k]`` with a LiDAR's noise-free beam k at robot pose ``poses[i]`` (0: no
-    return). ``mount``: x, y, rotation; the arithmetic is
-    :func:`~simmer.geometry.cast_scan`'s, beam by beam, so the readings are the device's own
-    to the last bit."""
-    px, py, rotation = mount[0], mount[1], mount[2]
+    return). ``mount``: x, y; ``vectors``: each beam's unit vector at heading 0 (the device's
+    ``vectors``); the arithmetic is :func:`~simmer.geometry.scan_revolution`'s, beam by beam,
+    so the readings are the device's own to the last bit."""
+    px, py = mount[0], mount[1]
     for i in numba.prange(poses.shape[0]):
-        rh = poses[i, 2]
-        rad = math.radians(rh)
+        rad = math.radians(poses[i, 2])
         c = math.cos(rad)
         s = math.sin(rad)
         ox = poses[i, 0] + px * c - py * s
         oy = poses[i, 1] + px * s + py * c
-        for k in range(directions.shape[0]):
-            d = cast_beam(
-                hwall,
-                vwall,
-                cell,
-                fallback,
-                block,
-                see_block,
-                ox,
-                oy,
-                (rh + rotation) + directions[k],
-                high,
-            )
+        for k in range(vectors.shape[1]):
+            ex, ey = vectors[0, k], vectors[1, k]
+            dx = c * ex - s * ey
+            dy = s * ex + c * ey
+            d = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, high)
+            if d < 0.0:
+                d = ray_segments(ox, oy, dx, dy, fallback)
+            if see_block:
+                d = min(d, ray_segments(ox, oy, dx, dy, block))
             out[i, k] = 0.0 if (d == math.inf or d < low or d > high) else d
 
 
@@ -214,7 +210,7 @@ def _lidar(sim: Simulation, device: Lidar, poses: FloatArray, block: bool) -> Fl
         block and device.sees_block(sim),
         poses,
         device.mount,
-        device.directions,
+        device.vectors,
         s.min_range,
         s.max_range,
         out,
@@ -435,7 +431,7 @@ def lidar_table(
                 False,
                 poses,
                 np.zeros(3),
-                device.directions,
+                beam_vectors(device.directions, 0.0),
                 s.min_range,
                 s.max_range,
                 scans,
