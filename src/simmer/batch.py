@@ -1133,6 +1133,17 @@ class Model:
         """The sensors :meth:`read` and :meth:`expected` give, in column order."""
         return self._layout.sensor_ids
 
+    @property
+    def cell(self) -> float:
+        """Inches: the side of the maze's square cells (a move of one cell, a particle's cell)."""
+        return self._layout.maze.cell
+
+    @property
+    def open_cells(self) -> IntArray:
+        """(K, 2): row and column of every open cell of the maze, where a robot can be (cell
+        (r, c) spans x from c to c + 1 cells, y from r to r + 1)."""
+        return np.argwhere(~self._layout.maze.solid).astype(np.int64)
+
     def move(
         self,
         poses: FloatArray,
