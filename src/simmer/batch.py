@@ -257,6 +257,8 @@ def _clearance(
 
     ``samples``: points along the outline's edges, at most 2 ``loss`` apart. A lattice node
     is within ``step`` / sqrt(2) of a sample, and distance changes no faster than position."""
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
+        return -1.0  # no look-up for a pose that is nowhere
     rad = math.radians(heading)
     c = math.cos(rad)
     s = math.sin(rad)
