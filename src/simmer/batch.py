@@ -279,15 +279,6 @@ def _clearance(
     return best
 
 
-@_jit
-def _turned(a: float, b: float) -> float:
-    """Radians between headings ``a`` and ``b`` (degrees), the short way."""
-    if a == b:
-        return 0.0
-    d = abs(a - b) % 360.0
-    return math.radians(min(d, 360.0 - d))
-
-
 _MEMO_START = np.array([-1.0, 0.0, 0.0, 0.0, math.nan, math.nan, math.nan, 0.0, 0.0])
 """A robot's ``_collides`` memo before its first step: no clearance known (budget, where,
 where it was), no pose tested (pose, answer), no cool-down."""
@@ -304,7 +295,11 @@ def _known(memo: FloatArray, x: float, y: float, heading: float, radius: float) 
     :func:`_collides` so the common case costs no call with many arrays."""
     if x == memo[4] and y == memo[5] and heading == memo[6]:
         return 1 if memo[7] != 0.0 else 0
-    left = memo[0] - radius * _turned(heading, memo[3])
+    turned = 0.0  # radians between this heading and memo[3], the short way
+    if heading != memo[3]:
+        d = abs(heading - memo[3]) % 360.0
+        turned = math.radians(min(d, 360.0 - d))
+    left = memo[0] - radius * turned
     if left > 0.0 and (x - memo[1]) ** 2 + (y - memo[2]) ** 2 < left * left:
         return 0
     return -1
