@@ -3,6 +3,7 @@ way, bit for bit, with noise on; the particle filter's model agrees with the sim
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import math
 from typing import Any
@@ -184,6 +185,40 @@ def test_the_model_moves_particles_as_the_drive_does() -> None:
         np.tile(start, (200, 1)), "w0", 10.0, np.random.default_rng(4)
     )
     assert np.std(noisy[:, 1]) > 0.1  # the drive's error spreads them
+
+
+def test_the_free_space_shortcut_changes_no_move() -> None:
+    """Model.move skips the collision test where the robot is provably clear of every wall and
+    the block: particles all over the maze (against walls, by the block, with bias and error)
+    end exactly where testing every step puts them."""
+    data = noisy_data()
+    data["drives"]["w0"]["bias"] = {"x": 0.01, "y": 0.0, "rotation": 0.3}
+    model = Model(make_config(data))
+    layout = model._layout
+    assert len(layout.free) > 0
+    assert layout.field.size > 0
+    tested = Model(make_config(data))
+    tested._layout = dataclasses.replace(layout, free=np.zeros((0, 2)))  # every step tested
+    rng = np.random.default_rng(11)
+    rows, cols = layout.maze.solid.shape
+    cell = layout.maze.cell
+    n = 600
+    poses = np.column_stack(
+        (
+            rng.uniform(0.0, cols * cell, n),
+            rng.uniform(0.0, rows * cell, n),
+            rng.uniform(0.0, 360.0, n),
+        )
+    )
+    poses[:40, :2] = model._block_xy[0] + rng.normal(0.0, 4.0, (40, 2))  # by the block
+    blocked = 0
+    for drive, amount in (("w0", 12.0), ("w0", -7.0), ("r0", 90.0), ("r0", -200.0)):
+        fast = model.move(poses, drive, amount, np.random.default_rng(5))
+        slow = tested.move(poses, drive, amount, np.random.default_rng(5))
+        np.testing.assert_array_equal(fast, slow)
+        blocked += int((np.abs(fast - poses).sum(axis=1) == 0).sum())
+        poses = fast
+    assert blocked > 50  # many particles met a wall on the way
 
 
 def load_example(name: str) -> Any:

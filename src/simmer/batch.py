@@ -33,7 +33,14 @@ from simmer.config.scenario import draw_scenario
 from simmer.config.zones import Zones
 from simmer.devices import Drive, DriveParams, UltrasonicParams
 from simmer.errors import BatchError
-from simmer.geometry import FloatArray, ray_grid, ray_segments, robot_blocked
+from simmer.geometry import (
+    FloatArray,
+    place_polygon,
+    polygon_hits_grid,
+    polygons_overlap,
+    ray_grid,
+    ray_segments,
+)
 from simmer.world.simulation import source_stream
 
 __all__ = ["Batch", "BatchError", "Model"]
@@ -45,6 +52,16 @@ NOISE_BLOCK = 256
 """Noise values drawn at once from each robot's stream of each noisy device (per refill)."""
 MAX_ROBOTS = 1_000_000
 """The most robots one batch holds (``batch_robots`` in docs/limits.md)."""
+
+FREE_SPACING = 0.5
+"""Inches between the outline's points that the free-space shortcut checks."""
+FIELD_CELL = 48
+"""Wall-distance lattice nodes per cell side (fewer in a maze so large it would pass
+``FIELD_NODES``): finer lets a robot closer to a wall skip its collision test."""
+FIELD_NODES = 1_000_000
+"""The most nodes the wall-distance lattice has (8 MB)."""
+_MARGIN = 1e-6
+"""Inches: the clearance a free-space shortcut keeps besides its bounds (rounding is ~1e-14)."""
 
 _jit = numba.njit(cache=True, nogil=True, fastmath=False)
 _MAX_THREADS: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
@@ -179,6 +196,171 @@ def _read_sensors(
 
 
 @_jit
+def _wall_field(
+    hwall: BoolArray, vwall: BoolArray, solid: BoolArray, cell: float, step: float
+) -> FloatArray:
+    """The distance from each node of a square lattice (``step`` apart, from the maze's
+    corner) to the nearest grid wall, solid cell or the outside of the grid, capped at
+    ``cell``: what ``robot_blocked`` tests against, so a polygon farther than this from every
+    node's obstacles cannot touch one. Only the 3 x 3 cells around a node can be nearer."""
+    rows = solid.shape[0]
+    cols = solid.shape[1]
+    width = cols * cell
+    height = rows * cell
+    nx = int(math.floor(width / step)) + 1
+    ny = int(math.floor(height / step)) + 1
+    out = np.empty((ny, nx))
+    for j in range(ny):
+        y = j * step
+        r = min(int(math.floor(y / cell)), rows - 1)
+        for i in range(nx):
+            x = i * step
+            c = min(int(math.floor(x / cell)), cols - 1)
+            best = min(cell, x, y, width - x, height - y)
+            for rr in range(max(r - 1, 0), min(r + 3, rows + 1)):
+                for cc in range(max(c - 1, 0), min(c + 2, cols)):
+                    if hwall[rr, cc]:
+                        gx = min(max(x, cc * cell), (cc + 1) * cell)
+                        best = min(best, math.hypot(x - gx, y - rr * cell))
+            for rr in range(max(r - 1, 0), min(r + 2, rows)):
+                for cc in range(max(c - 1, 0), min(c + 3, cols + 1)):
+                    if vwall[rr, cc]:
+                        gy = min(max(y, rr * cell), (rr + 1) * cell)
+                        best = min(best, math.hypot(x - cc * cell, y - gy))
+            for rr in range(max(r - 1, 0), min(r + 2, rows)):
+                for cc in range(max(c - 1, 0), min(c + 2, cols)):
+                    if solid[rr, cc]:
+                        gx = min(max(x, cc * cell), (cc + 1) * cell)
+                        gy = min(max(y, rr * cell), (rr + 1) * cell)
+                        best = min(best, math.hypot(x - gx, y - gy))
+            out[j, i] = best
+    return out
+
+
+@_jit
+def _clearance(
+    samples: FloatArray,
+    loss: float,
+    x: float,
+    y: float,
+    heading: float,
+    field: FloatArray,
+    step: float,
+    bx: float,
+    by: float,
+    block_radius: float,
+    radius: float,
+) -> float:
+    """A lower bound on how far the outline placed at (x, y, heading) is from every wall,
+    solid cell, the outside and the block (less a margin): > 0 means ``robot_blocked`` is
+    False there, and stays False while the outline moves less than this.
+
+    ``samples``: points along the outline's edges, at most 2 ``loss`` apart. A lattice node
+    is within ``step`` / sqrt(2) of a sample, and distance changes no faster than position."""
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
+        return -1.0  # no look-up for a pose that is nowhere
+    rad = math.radians(heading)
+    c = math.cos(rad)
+    s = math.sin(rad)
+    ny = field.shape[0]
+    nx = field.shape[1]
+    lost = loss + step * 0.70711 + _MARGIN
+    best = math.hypot(x - bx, y - by) - radius - block_radius - _MARGIN
+    for k in range(samples.shape[0]):
+        px = samples[k, 0]
+        py = samples[k, 1]
+        i = int(math.floor((x + px * c - py * s) / step + 0.5))
+        j = int(math.floor((y + px * s + py * c) / step + 0.5))
+        if i < 0 or j < 0 or i >= nx or j >= ny:
+            return -1.0
+        best = min(best, field[j, i] - lost)
+        if best <= 0.0:
+            break  # not clear: how far in does not matter
+    return best
+
+
+_MEMO_START = np.array([-1.0, 0.0, 0.0, 0.0, math.nan, math.nan, math.nan, 0.0, 0.0])
+"""A robot's ``_collides`` memo before its first step: no clearance known (budget, where,
+where it was), no pose tested (pose, answer), no cool-down."""
+_COOL_DOWN = 8
+"""Steps a robot near a wall is tested outright before its clearance is computed again."""
+
+
+@_jit
+def _known(memo: FloatArray, x: float, y: float, heading: float, radius: float) -> int:
+    """What ``memo`` already tells of the outline at (x, y, heading): 1 blocked (the pose last
+    tested, which was), 0 free (the pose last tested, or the outline moved less than its
+    clearance ``memo[0]`` since that was computed at ``memo[1:4]``: no point of it moved farther
+    than the centre did plus ``radius`` times the turn), -1 not known. Kept apart from
+    :func:`_collides` so the common case costs no call with many arrays."""
+    if x == memo[4] and y == memo[5] and heading == memo[6]:
+        return 1 if memo[7] != 0.0 else 0
+    turned = 0.0  # radians between this heading and memo[3], the short way
+    if heading != memo[3]:
+        d = abs(heading - memo[3]) % 360.0
+        turned = math.radians(min(d, 360.0 - d))
+    left = memo[0] - radius * turned
+    if left > 0.0 and (x - memo[1]) ** 2 + (y - memo[2]) ** 2 < left * left:
+        return 0
+    return -1
+
+
+@_jit
+def _collides(
+    memo: FloatArray,
+    x: float,
+    y: float,
+    heading: float,
+    outline: FloatArray,
+    scratch: FloatArray,
+    free: FloatArray,
+    free_loss: float,
+    field: FloatArray,
+    field_step: float,
+    radius: float,
+    hwall: BoolArray,
+    vwall: BoolArray,
+    solid: BoolArray,
+    cell: float,
+    block_poly: FloatArray,
+    bx: float,
+    by: float,
+    block_radius: float,
+) -> bool:
+    """``geometry.robot_blocked`` for the outline at (x, y, heading) where :func:`_known` does
+    not know, the same answer at a fraction of the cost: the clearance (:func:`_clearance`,
+    from ``free`` points along the outline and the wall ``field``; none: no shortcut) computed
+    and remembered, and if it is not positive the test, with the block's polygons left out
+    where the two cannot meet. ``memo``: clearance, x, y, heading where computed, the last pose
+    tested, its answer, steps of cool-down left (a robot near a wall is tested outright a
+    while before its clearance is computed again)."""
+    if free.shape[0] > 0:
+        if memo[8] > 0.0:
+            memo[8] -= 1.0
+        else:
+            budget = _clearance(
+                free, free_loss, x, y, heading, field, field_step, bx, by, block_radius, radius
+            )
+            memo[0] = budget
+            memo[1] = x
+            memo[2] = y
+            memo[3] = heading
+            if budget > 0.0:
+                return False
+            memo[8] = _COOL_DOWN
+    place_polygon(outline, x, y, heading, scratch)
+    blocked = polygon_hits_grid(scratch, hwall, vwall, solid, cell) or (
+        math.hypot(x - bx, y - by) <= radius + block_radius + _MARGIN
+        and polygons_overlap(scratch, block_poly)
+    )
+    memo[4] = x
+    memo[5] = y
+    memo[6] = heading
+    memo[7] = 1.0 if blocked else 0.0
+    return blocked
+
+
+@_jit
 def _wrap(angle: float) -> float:
     """``geometry.wrap_degrees``: to [0, 360)."""
     wrapped = angle % 360.0
@@ -203,6 +385,12 @@ def _robot(
     bias: FloatArray,
     outline: FloatArray,
     scratch: FloatArray,
+    memo: FloatArray,
+    free: FloatArray,
+    free_loss: float,
+    field: FloatArray,
+    field_step: float,
+    radius: float,
     hwall: BoolArray,
     vwall: BoolArray,
     solid: BoolArray,
@@ -223,8 +411,18 @@ def _robot(
     """Robot i: its command (if any), then ``steps`` simulation steps, as
     ``Simulation.execute`` and ``Simulation._step_once`` do them.
 
-    ``drives[d]``: unit x, unit y, turn, speed, error total."""
+    ``drives[d]``: unit x, unit y, turn, speed, error total. ``memo``: :func:`_collides`'s
+    (reset here); ``free``, ``field`` and ``radius`` as it takes them."""
     n_drives = drives.shape[0]
+    memo[:] = _MEMO_START
+    block_radius = 0.0  # the block's farthest corner from its centre
+    for v in range(block_poly.shape[1]):
+        block_radius = max(
+            block_radius,
+            math.hypot(block_poly[i, v, 0] - block_xy[i, 0], block_poly[i, v, 1] - block_xy[i, 1]),
+        )
+    trig_heading = wrap_in = wrap_out = math.nan
+    c = s = 0.0
     d = command_drive[i]
     if d >= 0:
         moving = False
@@ -262,15 +460,45 @@ def _robot(
             x = pose[i, 0]
             y = pose[i, 1]
             heading = pose[i, 2]
-            rad = math.radians(heading)
-            c = math.cos(rad)
-            s = math.sin(rad)
+            if heading != trig_heading:  # a straight drive keeps its heading: same cos, sin
+                rad = math.radians(heading)
+                c = math.cos(rad)
+                s = math.sin(rad)
+                trig_heading = heading
             tx = x + (dx * c - dy * s)
             ty = y + (dx * s + dy * c)
-            th = _wrap(heading + rotation)
-            if robot_blocked(
-                outline, tx, ty, th, scratch, hwall, vwall, solid, cell, block_poly[i]
-            ):
+            turned = heading + rotation
+            if turned != wrap_in:  # the same sum wraps to the same heading
+                wrap_in = turned
+                wrap_out = _wrap(turned)
+            th = wrap_out
+            known = _known(memo, tx, ty, th, radius)
+            blocked = (
+                known == 1
+                if known >= 0
+                else _collides(
+                    memo,
+                    tx,
+                    ty,
+                    th,
+                    outline,
+                    scratch,
+                    free,
+                    free_loss,
+                    field,
+                    field_step,
+                    radius,
+                    hwall,
+                    vwall,
+                    solid,
+                    cell,
+                    block_poly[i],
+                    block_xy[i, 0],
+                    block_xy[i, 1],
+                    block_radius,
+                )
+            )
+            if blocked:
                 blocked_steps[i] += 1
                 if not was_blocked[i]:
                     collisions[i] += 1
@@ -280,6 +508,10 @@ def _robot(
                 pose[i, 0] = tx
                 pose[i, 1] = ty
                 pose[i, 2] = th
+        if sensors.shape[0] == 0:
+            if moved:
+                continue
+            break  # nothing moves and nothing is read: the other steps change nothing
         _read_sensors(
             i,
             pose[i, 0],
@@ -317,6 +549,11 @@ def _step_all(
     drive_channel: IntArray,
     bias: FloatArray,
     outline: FloatArray,
+    free: FloatArray,
+    free_loss: float,
+    field: FloatArray,
+    field_step: float,
+    radius: float,
     hwall: BoolArray,
     vwall: BoolArray,
     solid: BoolArray,
@@ -343,6 +580,7 @@ def _step_all(
         max_rays = max(max_rays, sensor_rays[k])
     for chunk in numba.prange(chunks):
         scratch = np.empty_like(outline)
+        memo = np.empty(len(_MEMO_START))
         rays = np.empty(max_rays)
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
             if not active[i]:
@@ -364,6 +602,12 @@ def _step_all(
                 bias,
                 outline,
                 scratch,
+                memo,
+                free,
+                free_loss,
+                field,
+                field_step,
+                radius,
                 hwall,
                 vwall,
                 solid,
@@ -450,6 +694,12 @@ class _Layout:
     """The devices whose noise a step draws, in channel order: noisy drives, then sensors."""
     drive_channel: IntArray
     sensor_channel: IntArray
+    free: FloatArray
+    """Points along the outline for the free-space shortcut (none: every step is tested)."""
+    free_loss: float
+    field: FloatArray
+    field_step: float
+    radius: float
 
     @classmethod
     def of(cls, config: SimConfig, sensors: Sequence[str] | None) -> _Layout:
@@ -509,12 +759,21 @@ class _Layout:
             if sensor_row[6] != 0.0:
                 channels.append(name)
         maze = Maze.from_settings(settings)
+        outline = robot_outline(settings)
+        free, free_loss, radius = _outline_samples(outline, maze.cell)
+        rows, cols = maze.solid.shape
+        field_step = max(maze.cell / FIELD_CELL, math.sqrt(rows * cols / FIELD_NODES) * maze.cell)
+        field = (
+            _wall_field(maze.hwall, maze.vwall, maze.solid, maze.cell, field_step)
+            if len(free)
+            else np.zeros((0, 0))
+        )
         return cls(
             config=config,
             maze=maze,
             zones=Zones.from_settings(settings),
             dt=1.0 / settings.frame_rate,
-            outline=robot_outline(settings),
+            outline=outline,
             drive_ids=tuple(drive_ids),
             drives=np.array(drive_rows, dtype=np.float64).reshape(-1, 5),
             sensor_ids=tuple(sensors),
@@ -523,11 +782,34 @@ class _Layout:
             channels=tuple(channels),
             drive_channel=np.array(drive_channel, dtype=np.int64),
             sensor_channel=np.array(sensor_channel, dtype=np.int64),
+            free=free,
+            free_loss=free_loss,
+            field=field,
+            field_step=field_step,
+            radius=radius,
         )
 
     @property
     def max_rays(self) -> int:
         return int(self.sensor_rays.max()) if len(self.sensor_rays) else 1
+
+
+def _outline_samples(outline: FloatArray, cell: float) -> tuple[FloatArray, float, float]:
+    """Points along the outline's edges at most ``FREE_SPACING`` apart, half the largest gap
+    (a point of an edge is that close to a sample) and the outline's farthest point from the
+    centre. None when the outline spans a cell or more: then a polygon could enclose a wall
+    without its edges coming near one, and every step is tested."""
+    radius = float(np.hypot(outline[:, 0], outline[:, 1]).max())
+    span = np.hypot(*(outline[:, None, :] - outline[None, :, :]).transpose(2, 0, 1)).max()
+    if span >= cell * 0.99:
+        return np.zeros((0, 2)), 0.0, radius
+    points, gap = list(outline), 0.0  # the corners first: the likeliest to be near a wall
+    for a, b in zip(outline, np.roll(outline, -1, axis=0), strict=True):
+        length = float(np.hypot(*(b - a)))
+        parts = max(1, math.ceil(length / FREE_SPACING))
+        gap = max(gap, length / parts)
+        points.extend(a + (b - a) * (k / parts) for k in range(1, parts))
+    return np.array(points, dtype=np.float64), gap / 2.0, radius
 
 
 def _config(config: SimConfig | str | Path | None) -> SimConfig:
@@ -768,6 +1050,11 @@ class Batch:
                 layout.drive_channel,
                 self._bias,
                 layout.outline,
+                layout.free,
+                layout.free_loss,
+                layout.field,
+                layout.field_step,
+                layout.radius,
                 maze.hwall,
                 maze.vwall,
                 maze.solid,
@@ -843,6 +1130,17 @@ class Model:
         """The sensors :meth:`read` and :meth:`expected` give, in column order."""
         return self._layout.sensor_ids
 
+    @property
+    def cell(self) -> float:
+        """Inches: the side of the maze's square cells (a move of one cell, a particle's cell)."""
+        return self._layout.maze.cell
+
+    @property
+    def open_cells(self) -> IntArray:
+        """(K, 2): row and column of every open cell of the maze, where a robot can be (cell
+        (r, c) spans x from c to c + 1 cells, y from r to r + 1)."""
+        return np.argwhere(~self._layout.maze.solid).astype(np.int64)
+
     def move(
         self,
         poses: FloatArray,
@@ -894,6 +1192,11 @@ class Model:
             layout.drive_channel,
             bias,
             layout.outline,
+            layout.free,
+            layout.free_loss,
+            layout.field,
+            layout.field_step,
+            layout.radius,
             maze.hwall,
             maze.vwall,
             maze.solid,

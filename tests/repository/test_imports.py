@@ -136,3 +136,17 @@ def test_only_the_window_imports_pygame_and_the_view_never_imports_the_window() 
         assert drawing == [], path
         if part in ("view", "record", "world", "devices", "colors.py"):
             assert not any(n.startswith("simmer.ui") for n in names), path
+
+
+def test_the_examples_import_only_the_public_api() -> None:
+    """What students copy uses only what docs/api.md promises (``simmer._api.PUBLIC``), in
+    examples/ and in ``simmer new``'s copies of them."""
+    from simmer._api import PUBLIC
+
+    paths = sorted(EXAMPLES.glob("*.py")) + sorted((SRC / "data").rglob("*.py"))
+    assert len(paths) > 10
+    for path in paths:
+        internal = sorted(
+            name for name in imported(path) if name.split(".")[0] == "simmer" and name not in PUBLIC
+        )
+        assert internal == [], f"{path.name} imports {internal}: use the public API"

@@ -27,7 +27,6 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from simmer.batch import Model
-from simmer.config.maze import Maze
 
 PARTICLES = 4000
 SIGMA = 1.5
@@ -44,9 +43,8 @@ class ParticleFilter:
     def __init__(self, model: Model, count: int = PARTICLES, seed: int = 0) -> None:
         self.model = model
         self.rng = np.random.default_rng(seed)
-        maze = Maze.from_settings(model.config.settings)
-        cell = maze.cell
-        open_cells = np.argwhere(~maze.solid)  # (row, column) of every open cell
+        cell = model.cell
+        open_cells = model.open_cells  # (row, column) of every open cell
         pick = open_cells[self.rng.integers(len(open_cells), size=count)]
         self.particles = np.column_stack(
             (
@@ -110,7 +108,7 @@ def localize(
     """Drive and filter for ``moves`` moves: ``read()`` gives the model's sensors' readings,
     ``drive(drive, amount)`` moves the robot and returns when it is done."""
     f = ParticleFilter(model)
-    cell = Maze.from_settings(model.config.settings).cell
+    cell = model.cell
     for _ in range(moves):
         readings = read()
         f.sense(readings)
