@@ -50,6 +50,26 @@ def test_calibrate_then_compare_with_the_fitted_fragment(tmp_path: Path) -> None
     assert compared.exit_code == 0, compared.output
     assert "real readings" in compared.output
     assert (tmp_path / "run" / "compare.png").read_bytes()[:4] == b"\x89PNG"
+    # the band carries the fit's intervals (kept beside the fragment) unless told not to
+    intervals = tomllib.loads((tmp_path / "fit" / "fitted.intervals.toml").read_text())
+    assert set(intervals) == set(fitted_keys(data))
+    assert "each seed draws 9 fitted settings from the intervals in" in compared.output
+    assert "each drawing 9 fitted settings from their intervals" in compared.output
+    point = CliRunner().invoke(
+        app,
+        ["compare", str(tmp_path / "run"), "--config", str(config), "--fitted", str(fitted),
+         "--seeds", "10", "--point-values"],
+    )  # fmt: skip
+    assert point.exit_code == 0, point.output
+    assert "fitted settings" not in point.output
+
+
+def fitted_keys(data: dict[str, object], prefix: str = "") -> list[str]:
+    """A TOML document's dotted keys."""
+    keys: list[str] = []
+    for key, value in data.items():
+        keys += fitted_keys(value, f"{prefix}{key}.") if isinstance(value, dict) else [prefix + key]
+    return keys
 
 
 def test_the_routine_is_written_for_the_configuration(tmp_path: Path) -> None:

@@ -6,7 +6,8 @@ serves the robot's serial port from a simulation with them (its own loop thread,
 ``simmer run --serial`` would), runs the routine program through a :class:`~simmer.tap.session.
 Tap` into a run folder, fits it with the team's configuration (the same robot, its noise
 unknown) and says which hidden settings fell inside their intervals, and how many of the
-run's readings fell inside the band the fitted configuration predicts. ``benchmarks/
+run's readings fell inside the band the fitted configuration predicts (each seed drawing the
+fitted settings from their intervals, as ``simmer compare --fitted`` does). ``benchmarks/
 calibration_recovery.py`` runs twenty; a slow test runs one.
 """
 
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from simmer.calibrate.compare import compare
-from simmer.calibrate.fit import Calibration, calibrate, fitted_overrides
+from simmer.calibrate.fit import Calibration, calibrate, fitted_overrides, intervals
 from simmer.calibrate.routine import plan, routine_program
 from simmer.config.models import SimConfig
 from simmer.config.overrides import with_overrides
@@ -119,5 +120,5 @@ def trial(number: int, folder: Path, base: SimConfig, seeds: int = 100) -> Trial
     calibration = calibrate(run, team)
     covered = {key: calibration.value(key).covers(value) for key, value in hidden.items()}
     fitted = with_overrides(team, fitted_overrides(calibration))
-    inside = compare(run, fitted, seeds=seeds).inside_fraction
+    inside = compare(run, fitted, seeds=seeds, intervals=intervals(calibration)).inside_fraction
     return Trial(number, hidden, calibration, covered, inside, folder)
