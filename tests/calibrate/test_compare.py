@@ -9,16 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from routine_support import record_routine
+from routine_support import record_routine, record_short_run
 from simmer.calibrate.compare import compare, draw_comparison, load_intervals
 from simmer.calibrate.groundtruth import hidden_settings, team_config
 from simmer.calibrate.routine import plan
 from simmer.calibrate.stats import Interval
 from simmer.config import load_config
-from simmer.config.models import SimConfig
 from simmer.config.overrides import with_overrides
-from simmer.tap.decode import Exchange
-from simmer.tap.folder import TapRecorder, load_tap_run
+from simmer.tap.folder import load_tap_run
 from simmer.world.simulation import Simulation
 
 SEEDS = 60
@@ -52,31 +50,6 @@ def test_a_matching_simulator_holds_the_readings_and_a_wrong_one_names_them(
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def _short_run(robot: Simulation, team: SimConfig, folder: Path) -> None:
-    """A few reads, one leg out and back, reads at each stop: recorded as a tap would."""
-    routine = plan(team)
-    recorder = TapRecorder(folder, team, "simulated")
-
-    def send(message: str) -> None:
-        replies = robot.command(message)
-        at = recorder.start + robot.time
-        recorder.record(Exchange(message, message.count(",") + 1, at, replies, at))
-
-    def reads() -> None:
-        for _ in range(4):
-            send(routine.read_message)
-
-    reads()
-    for amount in (routine.leg, -routine.leg):
-        send(f"{routine.drive}-{amount:g}")
-        robot.run_until_idle()
-        reads()
-    recorder.close(
-        "the program exited", False, bytes_sent=0, bytes_received=0, stray=0, program=None,
-        program_status=0,
-    )  # fmt: skip
-
-
 def test_the_fits_intervals_hold_readings_its_point_values_miss(tmp_path: Path) -> None:
     # a robot whose straight drive overshoots by 2%; a fit that put its bias at 0 but could
     # only say it lies within 5% either way (as a short run can): the fitted value alone
@@ -85,7 +58,7 @@ def test_the_fits_intervals_hold_readings_its_point_values_miss(tmp_path: Path) 
         team_config(load_config()), {"sensors.*.error": 0.002, "drives.w0.error.y": 0.002}
     )
     robot = Simulation(with_overrides(team, {"drives.w0.bias.y": 0.02}), seed=5)
-    _short_run(robot, team, tmp_path / "run")
+    record_short_run(robot, team, tmp_path / "run")
     run = load_tap_run(tmp_path / "run")
     point = compare(run, team, seeds=30)
     drawn = compare(run, team, seeds=30, intervals={"drives.w0.bias.y": Interval(0.0, -0.05, 0.05)})
