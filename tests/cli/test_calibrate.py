@@ -111,7 +111,7 @@ def test_compare_says_which_fitted_settings_it_draws(tmp_path: Path) -> None:
         '["sensors.u0.error"]\nvalue = 0.01\nlow = 0.008\nhigh = 0.012\nlevel = 0.99\n'
     )
     args = ["compare", str(tmp_path / "run"), "--config", str(config), "--fitted", str(fitted),
-            "--seeds", "5"]  # fmt: skip
+            "--seeds", "3"]  # fmt: skip
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     # u0's error was edited after the fit: compared at the file's value, and said so
