@@ -61,3 +61,28 @@ def record_routine(robot: Simulation, team: SimConfig, folder: Path) -> None:
         program=None,
         program_status=0,
     )
+
+
+def record_short_run(robot: Simulation, team: SimConfig, folder: Path) -> None:
+    """A few reads, one leg out and back, reads at each stop: recorded as a tap would."""
+    routine = plan(team)
+    recorder = TapRecorder(folder, team, "simulated")
+
+    def send(message: str) -> None:
+        replies = robot.command(message)
+        at = recorder.start + robot.time
+        recorder.record(Exchange(message, message.count(",") + 1, at, replies, at))
+
+    def reads() -> None:
+        for _ in range(4):
+            send(routine.read_message)
+
+    reads()
+    for amount in (routine.leg, -routine.leg):
+        send(f"{routine.drive}-{amount:g}")
+        robot.run_until_idle()
+        reads()
+    recorder.close(
+        "the program exited", False, bytes_sent=0, bytes_received=0, stray=0, program=None,
+        program_status=0,
+    )  # fmt: skip

@@ -12,6 +12,7 @@ import pytest
 
 from simmer.calibrate.groundtruth import trial
 from simmer.config import load_config
+from simmer.config.overrides import with_overrides
 
 
 @pytest.mark.slow
@@ -22,12 +23,18 @@ def test_one_hidden_robot_behind_the_tap_is_recovered(
     # the robot's busy polls, for this test only: the level is restored after it (set on the
     # logger for good, it silenced the warnings later tests on the same worker look for)
     caplog.set_level(logging.ERROR, logger="simmer")
-    result = trial(11, tmp_path / "trial", load_config(), seeds=100)  # fewer: a thin 99% band
+    # the robot drives four times as fast as the default and holds still for 1.5 s, not 3:
+    # the routine's 43 s of driving and holding become 16 s (its noise is per command, so
+    # what is fitted is the same; the gyroscope's drift is told less tightly from the
+    # shorter holds, which its interval says)
+    fast = with_overrides(
+        load_config(), {"drives.w0.velocity": [0.0, 24.0], "drives.r0.ang_velocity": 480.0}
+    )
+    result = trial(11, tmp_path / "trial", fast, seeds=100, hold=1.5)  # fewer: a thin band
     missed = [key for key, covered in result.covered.items() if not covered]
     assert len(missed) <= 1, missed
-    # The issue asks 95%. With the robot keeping the wall clock (a loaded machine's stall no
-    # longer leaves its gyroscope's readings behind the tap's times) this trial gives 94.5%
-    # to 97% from run to run: whole stops after a turn land outside together, even with the
-    # hidden settings (96.1% in one run). Not yet met; this holds the floor the runs reach.
-    assert result.inside >= 0.93
+    # the issue's 95%: compare's band carries the fit's intervals (each seed draws the
+    # fitted settings from them), so a leg's end where the fitted drive error sits below the
+    # robot's, or stops after a turn, are inside what the run could tell of the robot
+    assert result.inside >= 0.95, result.inside
     assert (tmp_path / "trial" / "run" / "exchanges.csv").exists()

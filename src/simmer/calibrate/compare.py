@@ -11,17 +11,27 @@ by its time, message and device. A gyroscope is compared as its change since the
 read of it: it counts from when it was switched on, which a tap cannot know; and its band is
 widened by what it drifts in :data:`TIMING_STEPS` steps, as the tap's time of a read is that
 close to the robot's.
+
+With the fit's intervals (``simmer calibrate`` writes them beside its fragment), each seed's
+simulator also draws its fitted settings from them (:meth:`~simmer.calibrate.stats.Interval.
+draw`), from a stream of its own per seed: the band is then what the simulator predicts given
+what the run could tell of the robot (the posterior predictive), not given the fitted values
+alone, which a run of eight legs knows to a few tenths of a percent at best.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from simmer.calibrate.fit import setting
+from simmer.calibrate.stats import Interval
 from simmer.config.models import SimConfig
+from simmer.config.overrides import with_overrides
 from simmer.protocol import parse_message
 from simmer.tap.folder import TapRun
 
@@ -35,6 +45,10 @@ RELATIVE = frozenset({"gyroscope"})
 """Device kinds compared as their change since the run's first read."""
 TIMING_STEPS = 2
 """Steps between the tap's time of a read and the robot's, which a gyroscope's band allows."""
+DRAWS = 3301
+"""The stream (with the seed) each seed's settings are drawn from, apart from the simulator's."""
+NAMES = ("value", "low", "high", "level")
+"""The numbers each interval's table in an intervals file holds."""
 
 
 @dataclass(frozen=True)
@@ -73,6 +87,8 @@ class Comparison:
     units: dict[str, str]
     relative: frozenset[str] = frozenset()
     """Devices compared as their change since the run's first read."""
+    drawn: tuple[str, ...] = ()
+    """The settings each seed drew from the fit's intervals (none: the values as given)."""
 
     @property
     def inside_fraction(self) -> float:
@@ -92,6 +108,11 @@ class Comparison:
         lines = [
             f"{total - len(outside)} of {total} real readings ({self.inside_fraction:.1%}) are "
             f"inside the band holding {LEVEL:.0%} of the simulator's, over {self.seeds} seeds"
+            + (
+                f", each drawing {len(self.drawn)} fitted settings from their intervals"
+                if self.drawn
+                else ""
+            )
         ]
         for reading in outside[:MAX_NAMED]:
             lines.append("  outside: " + reading.describe(self.units.get(reading.device, "")))
@@ -104,8 +125,15 @@ def _unit(kind: str) -> str:
     return {"ultrasonic": " in", "gyroscope": " deg", "compass": " deg"}.get(kind, "")
 
 
-def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison:
-    """The run's real readings against the band ``config`` predicts over ``seeds`` seeds."""
+def compare(
+    run: TapRun,
+    config: SimConfig,
+    *,
+    seeds: int = SEEDS,
+    intervals: Mapping[str, Interval] | None = None,
+) -> Comparison:
+    """The run's real readings against the band ``config`` predicts over ``seeds`` seeds;
+    with ``intervals`` (dotted key: the fit's interval), each seed draws those settings."""
     from simmer.world.simulation import Simulation
 
     kinds = {spec.id: (spec.group, spec.kind) for spec in config.devices}
@@ -128,7 +156,12 @@ def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison
         plan.append((index, compared, starts))
     simulated = np.empty((seeds, len(places)))
     for seed in range(seeds):
-        sim = Simulation(config, seed=seed)
+        drawn = config
+        if intervals:
+            rng = np.random.default_rng([DRAWS, seed])
+            draws = {key: setting(key, iv.draw(rng)) for key, iv in intervals.items()}
+            drawn = with_overrides(config, draws)
+        sim = Simulation(drawn, seed=seed)
         column = 0
         for index, compared, starts in plan:
             event = run.exchanges[index]
@@ -174,7 +207,39 @@ def compare(run: TapRun, config: SimConfig, *, seeds: int = SEEDS) -> Comparison
     ]
     units = {d: _unit(kinds[d][1]) for _, _, d in places}
     relative = frozenset(d for _, _, d in places if kinds[d][1] in RELATIVE)
-    return Comparison(readings, seeds, units, relative)
+    return Comparison(readings, seeds, units, relative, tuple(intervals or ()))
+
+
+def load_intervals(path: Path) -> dict[str, Interval]:
+    """The intervals file ``simmer calibrate`` writes beside its fragment
+    (:func:`simmer.calibrate.fit.intervals_document`); ValueError naming the file and key."""
+    import tomllib
+
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeError, tomllib.TOMLDecodeError) as exc:
+        raise ValueError(
+            f"{path}: not TOML ({exc}); write it again with simmer calibrate"
+        ) from None
+    found: dict[str, Interval] = {}
+    for key, table in data.items():
+        ends = [table.get(name) if isinstance(table, dict) else None for name in NAMES]
+        if not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in ends
+        ):
+            raise ValueError(
+                f'{path}: ["{key}"] needs finite numbers value, low, high and level; write '
+                "it again with simmer calibrate"
+            )
+        value, low, high, level = (float(v) for v in ends if v is not None)
+        if not (low <= value <= high and 0.0 < level < 1.0):
+            raise ValueError(
+                f'{path}: ["{key}"] needs low <= value <= high and 0 < level < 1; write it '
+                "again with simmer calibrate"
+            )
+        found[key] = Interval(value, low, high, level)
+    return found
 
 
 def draw_comparison(comparison: Comparison, target: Path, title: str) -> None:

@@ -27,11 +27,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from simmer.calibrate.routine import Plan, plan
-from simmer.calibrate.stats import LEVEL, mean_interval, variance_interval
+from simmer.calibrate.stats import LEVEL, Interval, mean_interval, variance_interval
 from simmer.config.models import SimConfig
 from simmer.errors import CalibrationError
 from simmer.protocol import parse_message
@@ -422,10 +423,53 @@ def _value(estimate: Estimate) -> str:
     return f"{value:.5g}" if "e" not in f"{value:.5g}" else f"{value:.6f}"
 
 
+def setting(key: str, value: float) -> float:
+    """``value`` as the setting ``key`` takes it: an error is never below 0."""
+    return max(value, 0.0) if ".error" in key else value
+
+
 def fitted_overrides(calibration: Calibration) -> dict[str, float]:
     """The fitted values as dotted overrides of a configuration."""
+    return {e.key: setting(e.key, e.value) for e in calibration.estimates if e.configurable}
+
+
+def intervals(calibration: Calibration) -> dict[str, Interval]:
+    """Each fitted setting with its interval (those with a setting and finite ends): what
+    ``simmer compare`` draws each seed's settings from."""
     return {
-        e.key: max(e.value, 0.0) if ".error" in e.key else e.value
+        e.key: Interval(setting(e.key, e.value), e.low, e.high)
         for e in calibration.estimates
-        if e.configurable
+        if e.configurable and math.isfinite(e.low) and math.isfinite(e.high)
     }
+
+
+INTERVALS_SUFFIX = ".intervals.toml"
+"""The side file beside a fitted fragment (``fitted.toml``: ``fitted.intervals.toml``)."""
+
+
+def intervals_path(fitted: Path) -> Path:
+    """Where the intervals of the fitted fragment ``fitted`` are kept."""
+    return fitted.with_name(fitted.stem + INTERVALS_SUFFIX)
+
+
+def intervals_document(calibration: Calibration, source: str) -> str:
+    """The fitted values' intervals as TOML (``simmer compare --fitted`` reads them beside the
+    fragment): a table per dotted key with its value, ends, level and count. Not a
+    configuration: the fragment is; this says how sure the fit is of it."""
+    lines = [
+        f"# The {LEVEL:.0%} intervals of the fitted values beside this file, fitted by simmer",
+        f"# calibrate from {source}. simmer compare --fitted reads them to draw each seed's",
+        "# settings from them (docs/calibration.md). Not a configuration: do not paste it.",
+    ]
+    for key, interval in intervals(calibration).items():
+        count = calibration.value(key).count
+        lines += [
+            "",
+            f'["{key}"]',
+            f"value = {interval.value!r}",
+            f"low = {interval.low!r}",
+            f"high = {interval.high!r}",
+            f"level = {interval.level!r}",
+            f"count = {count}",
+        ]
+    return "\n".join(lines) + "\n"

@@ -6,7 +6,8 @@ serves the robot's serial port from a simulation with them (its own loop thread,
 ``simmer run --serial`` would), runs the routine program through a :class:`~simmer.tap.session.
 Tap` into a run folder, fits it with the team's configuration (the same robot, its noise
 unknown) and says which hidden settings fell inside their intervals, and how many of the
-run's readings fell inside the band the fitted configuration predicts. ``benchmarks/
+run's readings fell inside the band the fitted configuration predicts (each seed drawing the
+fitted settings from their intervals, as ``simmer compare --fitted`` does). ``benchmarks/
 calibration_recovery.py`` runs twenty; a slow test runs one.
 """
 
@@ -21,8 +22,8 @@ from typing import Any
 import numpy as np
 
 from simmer.calibrate.compare import compare
-from simmer.calibrate.fit import Calibration, calibrate, fitted_overrides
-from simmer.calibrate.routine import plan, routine_program
+from simmer.calibrate.fit import Calibration, calibrate, fitted_overrides, intervals
+from simmer.calibrate.routine import HOLD, plan, routine_program
 from simmer.config.models import SimConfig
 from simmer.config.overrides import with_overrides
 
@@ -66,6 +67,8 @@ class Trial:
     covered: dict[str, bool]
     inside: float
     """Fraction of the run's readings inside the fitted configuration's band."""
+    inside_point: float | None
+    """The same with the fitted values alone (no draws from their intervals), if asked."""
     folder: Path
 
     def as_dict(self) -> dict[str, Any]:
@@ -73,6 +76,7 @@ class Trial:
         return {
             "trial": self.number,
             "inside": self.inside,
+            "inside_point": self.inside_point,
             "settings": {
                 key: {
                     "hidden": self.hidden[key],
@@ -86,8 +90,17 @@ class Trial:
         }
 
 
-def trial(number: int, folder: Path, base: SimConfig, seeds: int = 100) -> Trial:
-    """Run one trial into ``folder`` (a new folder) and fit it (see the module doc)."""
+def trial(
+    number: int,
+    folder: Path,
+    base: SimConfig,
+    seeds: int = 100,
+    *,
+    point: bool = False,
+    hold: float = HOLD,
+) -> Trial:
+    """Run one trial into ``folder`` (a new folder) and fit it (see the module doc); with
+    ``point``, also compare with the fitted values alone; ``hold``: the routine's holds."""
     from simmer.options import RunOptions
     from simmer.runner import Runner
     from simmer.tap.folder import load_tap_run
@@ -100,7 +113,7 @@ def trial(number: int, folder: Path, base: SimConfig, seeds: int = 100) -> Trial
     robot = Simulation(with_overrides(team, hidden), seed=number)
     folder.mkdir(parents=True)
     program = folder / "calibration_routine.py"
-    program.write_text(routine_program(team, plan(team)))
+    program.write_text(routine_program(team, plan(team), hold=hold))
     runner = Runner(robot, speed=1.0, keep_time=True)  # a real robot's clock never skips
     stop = threading.Event()
     link = Transports(runner.bus, robot.config, RunOptions.free_ports(serial=True))
@@ -119,5 +132,6 @@ def trial(number: int, folder: Path, base: SimConfig, seeds: int = 100) -> Trial
     calibration = calibrate(run, team)
     covered = {key: calibration.value(key).covers(value) for key, value in hidden.items()}
     fitted = with_overrides(team, fitted_overrides(calibration))
-    inside = compare(run, fitted, seeds=seeds).inside_fraction
-    return Trial(number, hidden, calibration, covered, inside, folder)
+    inside = compare(run, fitted, seeds=seeds, intervals=intervals(calibration)).inside_fraction
+    inside_point = compare(run, fitted, seeds=seeds).inside_fraction if point else None
+    return Trial(number, hidden, calibration, covered, inside, inside_point, folder)

@@ -4,7 +4,10 @@
 
 - ``fitted.toml``: the fitted values as dotted keys, each with its interval
   (:func:`simmer.calibrate.fit.fragment`);
-- ``readings.png``: the run's readings against the band the fitted simulator predicts
+- ``fitted.intervals.toml``: the intervals as data (:func:`simmer.calibrate.fit.
+  intervals_document`), which ``simmer compare --fitted fitted.toml`` reads beside it;
+- ``readings.png``: the run's readings against the band the fitted simulator predicts, each
+  seed drawing the fitted settings from their intervals
   (:func:`simmer.calibrate.compare.draw_comparison`), what ``simmer compare`` draws;
 - ``drives.png``: each leg's and turn's measured amount over the amount commanded, with the
   fitted scale (1 + bias) and the band the fitted error gives it;
@@ -19,7 +22,14 @@ from pathlib import Path
 
 from simmer.calibrate.compare import LEVEL as BAND_LEVEL
 from simmer.calibrate.compare import compare, draw_comparison
-from simmer.calibrate.fit import Calibration, fitted_overrides, fragment
+from simmer.calibrate.fit import (
+    Calibration,
+    fitted_overrides,
+    fragment,
+    intervals,
+    intervals_document,
+    intervals_path,
+)
 from simmer.calibrate.stats import LEVEL
 from simmer.config.models import SimConfig
 from simmer.config.overrides import with_overrides
@@ -43,11 +53,13 @@ def write_report(
 ) -> list[Path]:
     """Write the calibration's folder ``out`` (see the module doc); the files written."""
     out.mkdir(parents=True, exist_ok=True)
-    for name in (FITTED, READINGS, DRIVES, REPORT):
-        check_target(out / name, run_folder=False)
+    side = intervals_path(out / FITTED)
+    for target in (out / FITTED, side, out / READINGS, out / DRIVES, out / REPORT):
+        check_target(target, run_folder=False)
     write_text(out / FITTED, fragment(calibration, str(run.folder)), run_folder=False)
+    write_text(side, intervals_document(calibration, str(run.folder)), run_folder=False)
     fitted = with_overrides(config, fitted_overrides(calibration))
-    comparison = compare(run, fitted, seeds=seeds)
+    comparison = compare(run, fitted, seeds=seeds, intervals=intervals(calibration))
     draw_comparison(
         comparison, out / READINGS, f"{run.folder.name}: the readings against the fitted simulator"
     )
@@ -72,7 +84,9 @@ def write_report(
     lines += [
         "## The readings against the fitted simulator",
         "",
-        comparison.summary()[0] + f" (the band: the middle {BAND_LEVEL:.0%}).",
+        comparison.summary()[0] + f" (the band: the middle {BAND_LEVEL:.0%}; each seed "
+        f"draws the fitted settings from their {LEVEL:.0%} intervals, so the band carries "
+        "what this run could not tell of the robot).",
         "",
         *(f"    {line.strip()}" for line in comparison.summary()[1:]),
         "",
@@ -88,7 +102,7 @@ def write_report(
         "",
     ]
     write_text(out / REPORT, "\n".join(lines), run_folder=False)
-    written = [out / FITTED, out / READINGS, out / DRIVES, out / REPORT]
+    written = [out / FITTED, side, out / READINGS, out / DRIVES, out / REPORT]
     for path in written:
         say(f"wrote {path}")
     return written

@@ -186,9 +186,14 @@ with connect(serial=PORT, framed={framed}, width={width}, baudrate={baud}) as ro
 
 
 def routine_program(
-    config: SimConfig, routine: Plan, name: str = "calibration_routine.py", baud: int = 9600
+    config: SimConfig,
+    routine: Plan,
+    name: str = "calibration_routine.py",
+    baud: int = 9600,
+    hold: float = HOLD,
 ) -> str:
-    """The routine as a Python program for this robot (its protocol, devices and start)."""
+    """The routine as a Python program for this robot (its protocol, devices and start);
+    ``hold``: seconds of each hold (shorter ones state the drift less tightly)."""
     from pathlib import Path
 
     s = config.settings
@@ -223,7 +228,7 @@ def routine_program(
         heading=heading,
         read=routine.read_message,
         reads=READS,
-        hold=HOLD,
+        hold=hold,
         holds=HOLDS,
         drive=routine.drive,
         leg=routine.leg,

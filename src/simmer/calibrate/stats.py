@@ -8,7 +8,10 @@ the exact quantile from 5 degrees of freedom up, which is what a calibration's c
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from statistics import NormalDist
+
+import numpy as np
 
 LEVEL = 0.99
 """The confidence of every interval a calibration states: 99%, so that a check of each
@@ -58,3 +61,24 @@ def variance_interval(ss: float, df: float, level: float = LEVEL) -> tuple[float
         return math.nan, 0.0, math.inf
     tail = (1 - level) / 2
     return ss / df, ss / chi2_quantile(1 - tail, df), ss / chi2_quantile(tail, df)
+
+
+@dataclass(frozen=True)
+class Interval:
+    """What a fit knows of one setting: its value and the interval at ``level`` holding it."""
+
+    value: float
+    low: float
+    high: float
+    level: float = LEVEL
+
+    def draw(self, rng: np.random.Generator) -> float:
+        """One value the setting may have, given the fit: a split normal about the value with
+        the interval's ends as its ``level`` quantiles (a normal when the interval is
+        symmetric, as a t interval of a bias is; skewed as a chi-square interval of an error
+        is). Not uniform in the interval: that would make its ends as likely as the value
+        the run points to, and widen a band past what the run supports."""
+        z = normal_quantile(0.5 + self.level / 2)
+        u = float(rng.standard_normal())
+        side = self.high - self.value if u > 0 else self.value - self.low
+        return self.value + u * max(side, 0.0) / z
