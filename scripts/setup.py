@@ -71,9 +71,9 @@ def install(venv: Path, test: bool, windows: bool) -> None:
     pip = [python, "-m", "pip", "--quiet", "--disable-pip-version-check"]
     target = f"{REPO}[test]" if test else str(REPO)
     subprocess.run([*pip, "install", "--editable", target], check=True)
-    # Numba compiles the simulation's core on first use and caches it (5 s of CPU here): now,
-    # rather than in the student's first run (the sweep workers' warm-up does just that).
-    subprocess.run([python, "-c", "import simmer.sweep.preload"], check=True)
+    # Numba compiles each kernel on first use and caches it (about 20 s of CPU in all here):
+    # now, rather than in the student's first run or first simmer.batch call.
+    subprocess.run([python, "-m", "simmer.warmup"], check=True)
 
 
 def compile_source(venv: Path, windows: bool) -> None:

@@ -10,7 +10,6 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
 import pytest
 from hypothesis import settings
 
@@ -63,34 +62,12 @@ def cpu_seconds() -> float:
 
 @pytest.fixture(scope="session", autouse=True)
 def compiled_kernels() -> None:
-    """Compile the Numba kernels (or load them from their cache) before any test's body: in a
-    fresh clone, as in CI, compiling them takes about 5 CPU seconds, which would count against
-    whichever quick test first drives or reads a sensor."""
-    from simmer import Simulation
-    from simmer.runner import LocalLink
+    """Load the Numba kernels from their cache (scripts/setup.py compiled them there once)
+    before any test's body, or compile them where no set-up did: about a second of CPU, which
+    would otherwise count against whichever quick test first drives or reads a sensor."""
+    from simmer.warmup import compile_kernels
 
-    link = LocalLink(Simulation.from_config())
-    link.exchange("u0,u1,u2,u3")
-    link.exchange("w0-1")
-    link.clock("!idle")
-    from simmer.batch import Batch, Model  # the batch's kernels (issue 36)
-
-    Batch(None, [0]).command(["w0-1"])
-    poses = np.array([[12.0, 12.0, 0.0], [14.0, 12.0, 90.0]])
-    model = Model(None)
-    model.read(model.move(poses, "w0", 1.0), np.random.default_rng(0))
-    examples = Path(__file__).parents[1] / "examples"
-    if not (examples / "simmer_default.toml").is_file():
-        return  # a test runs a copy of this file elsewhere (without the examples or helpers)
-    sim = Simulation.from_config(examples / "simmer_default.toml")
-    sim.expected([[12.0, 12.0, 0.0]])  # the expected readings' kernels (~1.4 CPU s)
-    lidar = Simulation.from_config(examples / "lidar_rover.toml")
-    lidar.expected([[12.0, 12.0, 0.0]], ["l0"])  # a LiDAR's (issue 32)
-    from helpers import make_config, noisy_data
-
-    noisy = Model(make_config(noisy_data()))  # the batch model's paths with noise on
-    noisy.expected(noisy.move(poses, "w0", 1.0))
-    noisy.read(noisy.move(poses, "w0", 1.0, np.random.default_rng(0)), np.random.default_rng(0))
+    compile_kernels()
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -149,3 +126,10 @@ def ctrl_c() -> Iterator[None]:
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
     yield
     signal.signal(signal.SIGINT, before)
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto`` runs one worker more than there are CPUs: the slow tests spend much of their
+    time waiting (a page's real-time window runs, a robot driving its routine in real time,
+    child processes starting), and the spare worker keeps both CPUs busy meanwhile."""
+    return (os.cpu_count() or 1) + 1

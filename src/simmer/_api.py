@@ -51,6 +51,7 @@ INTERNAL = (
     "simmer.ui",
     "simmer.untrusted",
     "simmer.view",
+    "simmer.warmup",
     "simmer.world",
 )
 """The modules and packages (with everything in them) that are internal: they may change."""

@@ -37,7 +37,7 @@ LAYERS = [
     {"localize", "transport", "batch"},
     {"clock"},
     {"runner", "record"},
-    {"tap"},
+    {"tap", "warmup"},
     {"view"},
     {"ui"},
     {"serve"},

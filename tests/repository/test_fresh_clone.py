@@ -80,7 +80,7 @@ def test_the_set_up_installs_only_when_needed(
         return [call[-1] for call in calls if "install" in call]
 
     assert installs() == [str(repo)]  # a fresh clone: SimMeR, with the environment's own pip
-    assert ["-c", "import simmer.sweep.preload"] in [call[1:] for call in calls]  # Numba warmed
+    assert ["-m", "simmer.warmup"] in [call[1:] for call in calls]  # Numba's kernels compiled
     assert "source" in capsys.readouterr().out  # the activation line, once
     assert installs() == []  # nothing changed: straight to work
     assert calls[-1][1:] == ["-m", "compileall", "-q", str(repo / "src")]  # bytecode kept fresh
