@@ -128,6 +128,7 @@ def ctrl_c() -> Iterator[None]:
     signal.signal(signal.SIGINT, before)
 
 
+@pytest.hookimpl(optionalhook=True)  # xdist's hook: a run without xdist does not know it
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
     """``-n auto`` runs one worker more than there are CPUs: the slow tests spend much of their
     time waiting (a page's real-time window runs, a robot driving its routine in real time,
