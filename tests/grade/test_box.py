@@ -11,7 +11,9 @@ import os
 import shutil
 import sys
 import tempfile
+from concurrent.futures import Executor
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -21,6 +23,7 @@ from simmer.lockstep.box import BOX_UID_BASE
 from simmer.lockstep.netns import unavailable
 from simmer.proctree import descendants
 from simmer.sweep import local_pool
+from simmer.sweep.engine import Engine
 
 FORK_BOMB = """import os, signal, sys
 first = os.getpid()
@@ -93,17 +96,32 @@ def _state(pid: int) -> str:
     )
 
 
-def _box_users() -> list[int]:
-    """Processes running as a box's own user (root gives each box one)."""
+def _box_users(pools: list[Any]) -> list[int]:
+    """Processes running as the box users of these pools' workers (as root each worker's boxes
+    run as ``BOX_UID_BASE`` + its pid): a test's own, not another worker's grading."""
+    users = {BOX_UID_BASE + pid % 100_000 for pool in pools for pid in pool.worker_pids()}
+    assert users, "the pools' workers said their pids"
     found = []
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
-                if entry.stat().st_uid >= BOX_UID_BASE:
+                if entry.stat().st_uid in users:
                     found.append(int(entry.name))
             except OSError:
                 continue
     return found
+
+
+def _tracked_pool(workers: int, pools: list[Any]) -> Engine:
+    """:func:`local_pool`, each pool it makes kept in ``pools`` (whose box users to look for)."""
+    make = local_pool(workers)
+
+    def tracked() -> Executor:
+        pool = make()
+        pools.append(pool)
+        return pool
+
+    return tracked
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -133,13 +151,15 @@ def test_bad_programs_are_stopped_and_reported_and_the_good_team_is_unaffected(
     spec = load_grading(
         grading_folder(tmp_path / "course", LIMITS, teams, targets=("B1",), wall=30, seconds=60)
     )
-    run_grading(spec, tmp_path / "all", engine=local_pool(2), workers=2)
+    pools: list[Any] = []
+    run_grading(spec, tmp_path / "all", engine=_tracked_pool(2, pools), workers=2)
     alone = spec.only(tmp_path / "course" / "teams" / "good")
-    run_grading(alone, tmp_path / "alone", engine=local_pool(1), workers=1)
+    run_grading(alone, tmp_path / "alone", engine=_tracked_pool(1, pools), workers=1)
     left = [pid for pid in descendants() if "robot.py" in _command(pid)]
     # no process of theirs left (the forkserver stays, as it does for sweeps)
     assert left == [], [(_command(pid), _state(pid)) for pid in left]
-    assert _box_users() == []  # nor anywhere else, however it detached
+    assert pools
+    assert _box_users(pools) == []  # nor anywhere else, however it detached
 
     rows = _rows(tmp_path / "all" / "results.csv")
     by_team: dict[str, list[dict[str, str]]] = {}
