@@ -14,7 +14,7 @@ import pytest
 
 from simmer.sweep import dask_engine, run_sweep, sweep_from_dict
 
-from helpers import EXAMPLES, REPO
+from helpers import EXAMPLES, REPO, wait_for
 
 distributed = pytest.importorskip("distributed")
 psutil = pytest.importorskip("psutil")  # installed with distributed
@@ -52,7 +52,7 @@ def cluster() -> Any:
         dashboard_address="127.0.0.1:0",
     ) as running:
         yield running
-    assert not children()  # its workers are gone
+    wait_for(lambda: not children(), "the closed cluster's workers to exit", 60)
 
 
 def table(folder: Path) -> list[dict[str, str]]:
