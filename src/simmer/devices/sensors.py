@@ -9,10 +9,12 @@ import numpy as np
 from pydantic import Field
 
 from simmer.devices.base import (
+    BlockView,
     Circle,
     Color,
     Device,
     DeviceParams,
+    MazeView,
     Segment,
     Shape,
     Whole,
@@ -20,8 +22,9 @@ from simmer.devices.base import (
 )
 from simmer.geometry import (
     FloatArray,
+    Pose,
     Vec2,
-    cast_fan,
+    cast_fans,
     disk_samples,
     heading_vector,
     rectangle,
@@ -80,6 +83,69 @@ class UltrasonicParams(MeasuredParams):
         return []
 
 
+class _Fans:
+    """A robot's ultrasonic sensors cast together, once a pose: a message reads several
+    (``u0,u1,u2,u3``), and one compiled call for all of them costs less than one call each
+    (:func:`~simmer.geometry.cast_fans`). A sensor of a subclass of :class:`Ultrasonic` is
+    cast on its own, from its attributes as they are at each cast (it may turn itself).
+
+    A cast holds while the robot's pose, the block's outline and the maze are the very objects
+    it was made for: the robot moves by a new pose, and the block by a new outline
+    (:meth:`~simmer.config.maze.Block.place`) or with the robot it is carried by."""
+
+    def __init__(self, sensors: list[Ultrasonic], fixed: bool) -> None:
+        self.sensors = [] if fixed else sensors
+        """The sensors whose mounts are read again at each cast (a subclass's: one)."""
+        self.mounts = self._mounts(sensors)
+        self.columns = 4 + int(self.mounts[:, 6].max())
+        self.latest: FloatArray = np.zeros((len(sensors), self.columns))
+        """The latest cast, a row a sensor: its x, y and heading in the world, its fan's
+        shortest distance, then each ray's (inf: nothing within range). A new array a cast:
+        each sensor's last read keeps the rays it measured, for the window."""
+        self.distances: list[float] = []
+        self.pose: Pose | None = None
+        self.block: FloatArray | None = None
+        self.maze: MazeView | None = None
+
+    @staticmethod
+    def _mounts(sensors: list[Ultrasonic]) -> FloatArray:
+        rows = []
+        for sensor in sensors:
+            s = sensor.settings
+            height = math.nan if sensor._height is None else sensor._height
+            x, y = sensor.position
+            rows.append((x, y, sensor.rotation, height, s.beamwidth, s.max_range, s.num_rays))
+        return np.array(rows, dtype=np.float64)
+
+    def cast(self, robot_pose: Pose, block: BlockView, maze: MazeView) -> None:
+        """Cast every fan from ``robot_pose``."""
+        if self.sensors:
+            self.mounts = self._mounts(self.sensors)
+        mounts = self.mounts
+        cast = np.empty((len(mounts), self.columns))
+        rx, ry, rheading = robot_pose
+        cast_fans(
+            maze.hwall,
+            maze.vwall,
+            maze.cell,
+            maze.segments,
+            block.segments,
+            rx,
+            ry,
+            rheading,
+            block.x,
+            block.y,
+            block.size,
+            mounts,
+            cast,
+        )
+        self.latest = cast
+        self.distances = cast[:, 3].tolist()
+        # a sensor whose mount may change is cast again at each read
+        self.pose = None if self.sensors else robot_pose
+        self.block, self.maze = block.segments, maze
+
+
 class Ultrasonic(Device):
     """Shortest distance at which any ray of the cone meets a wall (or the block, if seen)."""
 
@@ -91,13 +157,16 @@ class Ultrasonic(Device):
         super().__init__(device_id, params, rng)
         assert isinstance(params, UltrasonicParams)
         self.settings = params
-        self.rays = np.full(params.num_rays, math.inf)
         self.last_time = -math.inf
-        self._last_x = self._last_y = 0.0
-        self.last_heading = 0.0
         self.reading = math.nan
         # the mounting height if set (None: the block's size, read at each read)
         self._height = params.height if params.height is not None else self.mount_height
+        self._fans: _Fans | None = None
+        """The robot's sensors cast with this one (made at the first read)."""
+        self._slot = 0
+        """This sensor's row in them."""
+        self._seen: FloatArray = np.concatenate((np.zeros(4), np.full(params.num_rays, math.inf)))
+        """This sensor's row of the cast of its last read (:attr:`_Fans.latest`): drawn."""
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
@@ -112,36 +181,28 @@ class Ultrasonic(Device):
         d = math.hypot(block.x - x, block.y - y)
         return math.degrees(math.atan2(h, d)) <= self.settings.beamwidth / 2.0
 
-    def simulate(self, value: float, world: World) -> float:
-        """Measure the distance in inches, with noise, clamped to [min_range, max_range].
+    def _join(self, world: World) -> _Fans:
+        """Cast with the robot's other ultrasonic sensors of this very kind that have no
+        company yet (a subclass's sensor: alone)."""
+        mates = [
+            d for d in world.robot.devices.values() if type(d) is Ultrasonic and d._fans is None
+        ]
+        fixed = type(self) is Ultrasonic and any(d is self for d in mates)
+        if not fixed:
+            mates = [self]
+        fans = _Fans(mates, fixed)
+        for slot, sensor in enumerate(mates):
+            sensor._fans, sensor._slot = fans, slot
+        return fans
 
-        The loop's dearest Python: :meth:`world_pose` and :meth:`sees_block` written out
-        (the same arithmetic, in the same order), nothing built but the reading."""
+    def simulate(self, value: float, world: World) -> float:
+        """Measure the distance in inches, with noise, clamped to [min_range, max_range]."""
+        fans = self._fans or self._join(world)
+        robot_pose, block, maze = world.robot.pose, world.block, world.maze
+        if robot_pose is not fans.pose or block.segments is not fans.block or maze is not fans.maze:
+            fans.cast(robot_pose, block, maze)
+        distance = fans.distances[self._slot]
         s = self.settings
-        rx, ry, rheading = world.robot.pose
-        px, py = self.position
-        rad = math.radians(rheading)
-        c, sn = math.cos(rad), math.sin(rad)
-        x = rx + px * c - py * sn
-        y = ry + px * sn + py * c
-        heading = rheading + self.rotation
-        maze, block = world.maze, world.block
-        h = (block.size if self._height is None else self._height) - block.size
-        d = math.hypot(block.x - x, block.y - y)
-        distance = cast_fan(
-            maze.hwall,
-            maze.vwall,
-            maze.cell,
-            maze.segments,
-            block.segments,
-            math.degrees(math.atan2(h, d)) <= s.beamwidth / 2.0,
-            x,
-            y,
-            heading,
-            s.beamwidth,
-            s.max_range,
-            self.rays,
-        )
         if distance == math.inf:
             reading = s.max_range
         else:
@@ -150,15 +211,24 @@ class Ultrasonic(Device):
                 distance += self.gauss() * error * distance
             reading = min(max(distance, s.min_range), s.max_range)
         self.last_time = world.time
-        self._last_x, self._last_y = x, y
-        self.last_heading = heading
+        self._seen = fans.latest[self._slot]
         self.reading = reading
         return reading
 
     @property
+    def rays(self) -> FloatArray:
+        """Each ray's distance at the last read (inf: nothing within range)."""
+        return self._seen[4 : 4 + self.settings.num_rays]
+
+    @property
+    def last_heading(self) -> float:
+        """Which way the sensor faced at its last read, degrees."""
+        return float(self._seen[2])
+
+    @property
     def last_origin(self) -> Vec2:
         """Where the sensor was at its last read (built when the window asks)."""
-        return Vec2(self._last_x, self._last_y)
+        return Vec2(float(self._seen[0]), float(self._seen[1]))
 
     def shapes(self, world: World) -> list[Shape]:
         """The rays of the last read, while it is recent enough to show."""
@@ -166,14 +236,13 @@ class Ultrasonic(Device):
         if not s.visible_measurement or world.time - self.last_time > s.visible_measurement_time:
             return []
         n = s.num_rays
+        rays, origin, heading = self.rays, self.last_origin, self.last_heading
         out: list[Shape] = []
         for k in range(n):
-            length = min(float(self.rays[k]), s.max_range)
-            direction = heading_vector(self.last_heading + ((k - (n - 1) / 2.0) / n) * s.beamwidth)
-            end = Vec2(
-                self.last_origin.x + direction.x * length, self.last_origin.y + direction.y * length
-            )
-            out.append(Segment(self.last_origin, end, s.ray_color))
+            length = min(float(rays[k]), s.max_range)
+            direction = heading_vector(heading + ((k - (n - 1) / 2.0) / n) * s.beamwidth)
+            end = Vec2(origin.x + direction.x * length, origin.y + direction.y * length)
+            out.append(Segment(origin, end, s.ray_color))
         return out
 
 

@@ -162,6 +162,8 @@ class Simulation:
         start = self.scenario.start
         self._robot = Robot(robot_outline(settings), start, settings.robot_height, devices)
         self._switched_off: dict[str, str] = {}
+        self._working = dict(self._robot.devices)
+        """The devices not switched off, by id: what a command reaches."""
         self._updating = list(self._robot.updating)
         self._listed = [self._robot.sensors[i] for i in dict.fromkeys(self._simulate_list)]
         for drive in self._robot.drives.values():
@@ -294,21 +296,9 @@ class Simulation:
     def _reply(self, command: Command) -> float | Answer:
         """Execute one parsed command: its value if it succeeded (no object built, as the
         loop's hot path wants), else a NaN :class:`Answer` saying why."""
-        if command.error is not None:
-            text = printable(command.text)
-            return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
-        if command.device == STOP_ID:
-            self._robot.stop()
-            self._end_move()
-            return math.inf
-        if command.device in self._switched_off:
-            why = f"command '{printable(command.text)}': device {command.device} is switched off"
-            return Answer.nan(logging.DEBUG, why)
-        device = self._robot.devices.get(command.device)
-        if device is None:
-            text = printable(command.text)
-            why = f"bad command '{text}': no device '{printable(command.device)}' on the robot"
-            return Answer.nan(logging.WARNING, why)
+        device = self._working.get(command.device)
+        if device is None or command.error is not None:
+            return self._refuse(command)
         try:
             value = float(device.simulate(command.value, self))
         except CommandError as exc:
@@ -319,18 +309,38 @@ class Simulation:
             text = printable(command.text)
             why = f"command '{text}': device {command.device} raised and is switched off"
             return Answer.nan(logging.DEBUG, why)
+        widest = self._widest
+        if -widest <= value <= widest and command.device not in self._robot.drives:
+            return value  # a reading that fits the reply: the loop's common case
         if command.device in self._robot.drives:
             if math.isnan(value):
                 why = f"'{printable(command.text)}': a drive is still moving"
                 return Answer.nan(logging.DEBUG, why)
             self._start_move(self._robot.drives[command.device], command.text)
-        if abs(value) > self._widest and math.isfinite(value):
+        if abs(value) > widest and math.isfinite(value):
             why = (
                 f"command '{printable(command.text)}': device {command.device} read {value:g}, "
                 f"beyond what a 4-byte reply holds (±{FLOAT32_MAX:.3g}); reply_bytes = 8 sends it"
             )
             return Answer.nan(logging.WARNING, why)
         return value
+
+    def _refuse(self, command: Command) -> float | Answer:
+        """A command no working device runs: malformed, the stop, or to a device switched off
+        or not on the robot."""
+        if command.error is not None:
+            text = printable(command.text)
+            return Answer.nan(logging.WARNING, f"bad command '{text}': {printable(command.error)}")
+        if command.device == STOP_ID:
+            self._robot.stop()
+            self._end_move()
+            return math.inf
+        if command.device in self._switched_off:
+            why = f"command '{printable(command.text)}': device {command.device} is switched off"
+            return Answer.nan(logging.DEBUG, why)
+        text = printable(command.text)
+        why = f"bad command '{text}': no device '{printable(command.device)}' on the robot"
+        return Answer.nan(logging.WARNING, why)
 
     # ----------------------------------------------------------------- time
 
@@ -427,6 +437,7 @@ class Simulation:
         """
         reason = describe_exception(exc)
         self._switched_off[device.id] = reason
+        self._working.pop(device.id, None)
         self._updating = [d for d in self._updating if d is not device]
         self._listed = [d for d in self._listed if d is not device]
         log.error(
