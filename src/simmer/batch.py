@@ -26,7 +26,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from simmer.config.loader import load_config
+from simmer.config.loader import as_config, load_config
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import SimConfig
 from simmer.config.scenario import draw_scenario
@@ -812,10 +812,6 @@ def _outline_samples(outline: FloatArray, cell: float) -> tuple[FloatArray, floa
     return np.array(points, dtype=np.float64), gap / 2.0, radius
 
 
-def _config(config: SimConfig | str | Path | None) -> SimConfig:
-    return config if isinstance(config, SimConfig) else load_config(config)
-
-
 # --------------------------------------------------------------------------- the batch
 
 
@@ -835,7 +831,7 @@ class Batch:
         *,
         threads: int = 1,
     ) -> None:
-        self.config = _config(config)
+        self.config = as_config(config)
         self._layout = layout = _Layout.of(self.config, sensors)
         if not 1 <= threads <= _MAX_THREADS:
             raise BatchError(
@@ -1110,7 +1106,7 @@ class Model:
         *,
         block: bool = True,
     ) -> None:
-        self.config = _config(config)
+        self.config = as_config(config)
         self._layout = layout = _Layout.of(self.config, sensors)
         settings = self.config.settings
         shown = Block.from_settings(settings)

@@ -248,7 +248,7 @@ def draw_comparison(comparison: Comparison, target: Path, title: str) -> None:
     from matplotlib import style
     from matplotlib.figure import Figure
 
-    from simmer.record.plots import _save
+    from simmer.record.plots import save_png
 
     devices = list(dict.fromkeys(r.device for r in comparison.readings))
     with style.context("default"):
@@ -288,4 +288,4 @@ def draw_comparison(comparison: Comparison, target: Path, title: str) -> None:
         axes[0].legend(loc="upper right", fontsize=8, ncols=4)
         axes[-1].set_xlabel("time since the tap started (s)")
         fig.suptitle(f"{title}\n{comparison.summary()[0]}", fontsize=10)
-        _save(fig, target)
+        save_png(fig, target)

@@ -113,7 +113,7 @@ def _draw_drives(calibration: Calibration, target: Path) -> None:
     from matplotlib import style
     from matplotlib.figure import Figure
 
-    from simmer.record.plots import _save
+    from simmer.record.plots import save_png
 
     drives = list(calibration.ratios)
     with style.context("default"):
@@ -155,4 +155,4 @@ def _draw_drives(calibration: Calibration, target: Path) -> None:
             ax.set_ylabel("measured / commanded")
             ax.grid(alpha=0.3)
             ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-        _save(fig, target)
+        save_png(fig, target)

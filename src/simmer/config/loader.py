@@ -59,6 +59,11 @@ def load_config(path: str | Path | None = None) -> SimConfig:
         return config_from_toml(text, str(path), path.parent)
 
 
+def as_config(config: SimConfig | str | Path | None) -> SimConfig:
+    """A configuration given as itself, as a file to load, or None (the built-in default)."""
+    return config if isinstance(config, SimConfig) else load_config(config)
+
+
 def read_config_data(path: str | Path) -> tuple[dict[str, Any], bool]:
     """A configuration file's data before validation, with the same checks and messages as
     :func:`load_config`, and whether it is an original SimMeR ``config.py`` (validate it with

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from simmer.ending import RunEnd
 from simmer.grade.board import Standing, write_board
 from simmer.grade.spec import GradeSpec
-from simmer.sweep.engine import Engine, Table, _execute_all, _Pool, run_table, to_film
+from simmer.sweep.engine import Engine, Pool, Table, execute_all, run_table, to_film
 from simmer.sweep.results import read_rows
 from simmer.sweep.runs import RunResult, RunSpec, film
 from simmer.sweep.success import OUTCOME_FIELDS, PROJECT_FIELDS
@@ -103,7 +103,7 @@ def _untimed(result: RunResult) -> RunResult:
     return replace(result, detail="") if result.status in STOPPED_AT_LIMIT else result
 
 
-def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: _Pool) -> int:
+def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: Pool) -> int:
     """Film each team's first ``spec.videos`` failures that have a folder and no video yet."""
     if not spec.videos:
         return 0
@@ -122,7 +122,7 @@ def _film(spec: GradeSpec, runs: list[RunSpec], folder: Path, pool: _Pool) -> in
                 folder / by_key[run.key()]["folder"] / "video.mp4", result.files["video.mp4"]
             )
 
-    _execute_all(todo, pool, film, record)
+    execute_all(todo, pool, film, record)
     return len(todo)
 
 

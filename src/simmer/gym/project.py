@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from simmer.batch import BatchError, _config
+from simmer.batch import BatchError
+from simmer.config.loader import as_config
 from simmer.config.models import SimConfig
 from simmer.devices import UltrasonicParams
 from simmer.gym.env import MazeEnv
@@ -66,7 +67,7 @@ class ProjectEnv(MazeEnv):
         success: str | None = None,
         render_mode: str | None = None,
     ) -> None:
-        cfg = _config(project_config() if config is None else config)
+        cfg = as_config(project_config() if config is None else config)
         if overrides:
             from simmer.config.overrides import with_overrides
 

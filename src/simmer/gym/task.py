@@ -16,7 +16,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from simmer.batch import BatchError, _config
+from simmer.batch import BatchError
+from simmer.config.loader import as_config
 from simmer.config.maze import Block, Maze, robot_outline
 from simmer.config.models import SimConfig
 from simmer.devices import DriveParams, UltrasonicParams
@@ -68,7 +69,7 @@ class Task:
         step_penalty: float = 0.01,
     ) -> Task:
         """Check the options and work out the task; BatchError names what to fix."""
-        cfg = _config(config)
+        cfg = as_config(config)
         if overrides:
             from simmer.config.overrides import with_overrides
 

@@ -641,7 +641,7 @@ def write_path_plot(run: RecordedRun, target: Path) -> PixelMap:
 
     with style.context("default"):
         fig, ax = _path_figure(run)
-        _save(fig, target)
+        save_png(fig, target)
         origin, unit = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
         height = fig.bbox.height
     return PixelMap(origin[0], unit[0] - origin[0], height - origin[1], origin[1] - unit[1])
@@ -689,7 +689,7 @@ def write_localization_plot(run: RecordedRun, target: Path) -> None:
             f"{HEADING_TOLERANCE:g}° from then on",
             fontsize=12,
         )
-        _save(fig, target)
+        save_png(fig, target)
 
 
 def write_sensor_plot(run: RecordedRun, target: Path) -> None:
@@ -697,7 +697,7 @@ def write_sensor_plot(run: RecordedRun, target: Path) -> None:
     from matplotlib import style
 
     with style.context("default"):
-        _save(_sensor_figure(run), target)
+        save_png(_sensor_figure(run), target)
 
 
 def recorded_scans(run: RecordedRun) -> list[tuple[float, RecordedScan]]:
@@ -780,7 +780,7 @@ def write_scan_plot(run: RecordedRun, timed: tuple[float, RecordedScan], target:
             f"{len(scan.distances)} beams, {missing} with no return (read as 0)",
             fontsize=11,
         )
-        _save(fig, target)
+        save_png(fig, target)
 
 
 def write_scans_plot(
@@ -813,18 +813,21 @@ def write_scans_plot(
             fontsize=12,
         )
         fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
-        _save(fig, target)
+        save_png(fig, target)
 
 
-def _save(fig: Figure, target: Path) -> None:
-    """Write a figure as PNG with the Agg canvas (no pyplot, no window), into a run folder
-    safely (:func:`~simmer.record.safefile.replacing`: never through a link at its name)."""
+def save_png(
+    fig: Figure, target: Path, *, run_folder: bool = True, dpi: float | None = None
+) -> None:
+    """Write a figure as PNG with the Agg canvas (no pyplot, no window), safely
+    (:func:`~simmer.record.safefile.replacing`: never through a link at its name; into a run
+    folder unless ``run_folder`` is False), at ``dpi`` (None: the figure's)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     drawable_texts(fig)
     FigureCanvasAgg(fig)
-    with replacing(target) as temp:
-        fig.savefig(temp, dpi=fig.dpi, format="png")
+    with replacing(target, run_folder=run_folder) as temp:
+        fig.savefig(temp, dpi=fig.dpi if dpi is None else dpi, format="png")
 
 
 def drawable_texts(fig: Figure) -> None:

@@ -134,7 +134,7 @@ def local_pool(workers: int | None = None) -> Engine:
 
 
 class _LocalPool(ProcessPoolExecutor):
-    """A local pool whose workers start no run once ``stopping`` is set (:meth:`_Pool.stop`):
+    """A local pool whose workers start no run once ``stopping`` is set (:meth:`Pool.stop`):
     a run queued before a stop would otherwise start after it, and run to its wall limit.
     Its workers' pids come from the workers themselves (``started``), not from the
     executor's private records."""
@@ -190,9 +190,9 @@ def _watch_sweep(sweep: int, stopping: ctypes.c_bool, started: Any) -> None:
 
 
 @contextmanager
-def _stopped_by_signals(pool: _Pool) -> Iterator[None]:
+def _stopped_by_signals(pool: Pool) -> Iterator[None]:
     """Within ``with``: :data:`STOP_SIGNALS` stop the sweep as Ctrl-C does: the runs stop
-    (:meth:`_Pool.stop`), and :class:`SweepStopped` is raised here, where the pool is then
+    (:meth:`Pool.stop`), and :class:`SweepStopped` is raised here, where the pool is then
     shut down. Only in the main thread. Ctrl-C or a closed terminal signals the workers too:
     the SIGINT sent here then reaches a run that is stopping already, which only notes it
     (:func:`simmer.serve.serve`)."""
@@ -292,7 +292,7 @@ def dask_engine(address: str | None = None, workers: int | None = None) -> Engin
     return make
 
 
-class _Pool:
+class Pool:
     """The engine's executor: made when first needed, made again after a local pool breaks,
     shut down at the end."""
 
@@ -382,7 +382,7 @@ class Table:
 def run_table(
     runs: list[RunSpec],
     table: Table,
-    then: Callable[[_Pool], T],
+    then: Callable[[Pool], T],
     *,
     engine: Engine | None,
     workers: int | None,
@@ -395,7 +395,7 @@ def run_table(
     ``then(pool)`` on the same pool. Signals stop it all cleanly (:func:`_stopped_by_signals`).
     Returns the runs carried out now, the successes in the whole table, and what ``then`` gave."""
     console, label, show_successes = progress
-    pool = _Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
+    pool = Pool(engine or local_pool(workers), workers or os.cpu_count() or 1)
     try:
         pool.executor()  # a refused cluster (DASK_WORKER_THREADS) leaves no results.csv
         results = ResultsFile(table.folder / "results.csv", table.columns, resume=resume)
@@ -419,7 +419,7 @@ def run_table(
                     advance(successes if show_successes else None)
 
                 try:
-                    _execute_all(todo, pool, execute, record)
+                    execute_all(todo, pool, execute, record)
                 finally:
                     complete = all(run.key() in results.done for run in runs)
                     results.close([run.key() for run in runs] if complete else None)
@@ -452,7 +452,7 @@ def to_film(
 
 
 def _film_failures(
-    spec: SweepSpec, runs: list[RunSpec], folder: Path, pool: _Pool, console: Console | None
+    spec: SweepSpec, runs: list[RunSpec], folder: Path, pool: Pool, console: Console | None
 ) -> tuple[int, list[str]]:
     """Film the first ``spec.videos`` failures in the sweep's order that had a simulation and
     have no video yet, into their run folders; how many, and remarks for the summary."""
@@ -478,12 +478,12 @@ def _film_failures(
                 )
             advance(None)
 
-        _execute_all(todo, pool, film, record)
+        execute_all(todo, pool, film, record)
     return len(todo), remarks
 
 
-def _execute_all(
-    runs: list[RunSpec], pool: _Pool, work: Work, record: Callable[[RunSpec, RunResult], None]
+def execute_all(
+    runs: list[RunSpec], pool: Pool, work: Work, record: Callable[[RunSpec, RunResult], None]
 ) -> None:
     """Keep twice the pool's width of runs in flight, ``work`` doing each, recording each as
     it finishes; a broken local pool's runs in flight are retried once on a fresh pool, then

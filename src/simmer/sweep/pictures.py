@@ -14,8 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simmer.record.page import draw_items
-from simmer.record.plots import drawable_texts
-from simmer.record.safefile import replacing
+from simmer.record.plots import save_png
 from simmer.scene import Look, Walls, maze_items, open_cell_items
 from simmer.sweep.results import SettingSummary, wilson_interval
 from simmer.sweep.spec import Distribution, SweepSpec
@@ -269,12 +268,7 @@ def _short(value: str) -> str:
 
 
 def _save(fig: Figure, target: Path) -> None:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    drawable_texts(fig)
-    FigureCanvasAgg(fig)
-    with replacing(target, run_folder=False) as temp:  # never through a link at its name
-        fig.savefig(temp, format="png", dpi=100)
+    save_png(fig, target, run_folder=False, dpi=100)  # a sweep's folder is not a run folder
 
 
 def _label(spec: SweepSpec, setting: Sequence[str], sep: str = "\n") -> str:

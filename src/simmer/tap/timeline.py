@@ -63,7 +63,7 @@ def draw_tap_timeline(run: TapRun, target: Path) -> None:
     from matplotlib import style
     from matplotlib.figure import Figure
 
-    from simmer.record.plots import _save
+    from simmer.record.plots import save_png
 
     seen = traffic(run)
     drives, readings, unanswered = seen.drives, seen.readings, seen.unanswered
@@ -114,4 +114,4 @@ def draw_tap_timeline(run: TapRun, target: Path) -> None:
             "answered NaN or never",
             fontsize=10,
         )
-        _save(fig, target)
+        save_png(fig, target)
