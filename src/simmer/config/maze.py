@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -63,8 +64,6 @@ class Maze:
     solid: BoolArray = field(init=False)
     hwall: BoolArray = field(init=False)
     vwall: BoolArray = field(init=False)
-    segments: FloatArray = field(init=False)
-    floor_white: BoolArray = field(init=False)
 
     def __post_init__(self) -> None:
         # Compared in Python: any other whole number is floor, however large (2**64 is too).
@@ -77,8 +76,17 @@ class Maze:
         self.hwall[rows, :] = True
         self.vwall[:, 0] = True
         self.vwall[:, cols] = True
-        self.segments = _merged_segments(self.hwall, self.vwall, self.cell)
-        self.floor_white = floor_pattern(cols, rows, self.cell, self.tile, self.floor_seed)
+
+    @cached_property
+    def segments(self) -> FloatArray:
+        """The walls as segments (N, 4: x1, y1, x2, y2), collinear touching pieces merged
+        (made when first asked: checking a maze file's cells needs only the grid)."""
+        return _merged_segments(self.hwall, self.vwall, self.cell)
+
+    @cached_property
+    def floor_white(self) -> BoolArray:
+        """Which floor tiles are white (:func:`floor_pattern`; made when first asked)."""
+        return floor_pattern(self.cols, self.rows, self.cell, self.tile, self.floor_seed)
 
     @classmethod
     def from_settings(cls, settings: Settings) -> Maze:

@@ -115,8 +115,16 @@ class MazeView(Protocol):
     tile: float
     hwall: BoolArray
     vwall: BoolArray
-    segments: FloatArray
-    floor_white: BoolArray
+
+    @property
+    def segments(self) -> FloatArray:
+        """The walls as segments."""
+        ...
+
+    @property
+    def floor_white(self) -> BoolArray:
+        """Which floor tiles are white."""
+        ...
 
     def cast_ray(self, x: float, y: float, heading: float, limit: float = math.inf) -> float:
         """Distance from (x, y) along ``heading`` to the first wall (inf if beyond ``limit``)."""
