@@ -7,7 +7,7 @@ each move every particle is moved by the same command under the drive's noise
 in one compiled call) and weighed by how well the four ultrasonic readings match what its
 sensors would read there (:meth:`simmer.batch.Model.expected`: the simulator's own ray
 casting), then resampled to as many particles as the places it still covers need (KLD-sampling:
-some 1,500 while a few places match, 200 once they agree, so a move costs a twentieth). The
+some 1,000 while three places match, 200 once they agree, so a move costs a twentieth). The
 first reading is weighed in stages, the sensors assumed noisier at first, so every place that
 matches keeps its particles. The cloud and its mean are drawn over the maze with ``robot.show``
 (B in the window hides them), and the mean is reported as the pose estimate
@@ -51,7 +51,7 @@ DRIVE_SPREAD = 0.03
 
 
 def kld_count(k: int) -> int:
-    """KLD-sampling's particle count for a belief covering ``k`` bins (Fox 2003, eq. 14)."""
+    """KLD-sampling's particle count for a belief covering ``k`` bins (Fox 2003)."""
     if k < 2:
         return 1
     a = 2.0 / (9.0 * (k - 1))
@@ -59,13 +59,16 @@ def kld_count(k: int) -> int:
 
 
 class ParticleFilter:
-    """Particles (x, y, heading) with weights, moved and weighed by a :class:`Model`."""
+    """Particles (x, y, heading) with weights, moved and weighed by a :class:`Model`:
+    ``count`` spread at the start and the most kept; ``adaptive=False``: all of them
+    throughout and the first reading weighed at once (the filter as it was, to compare)."""
 
     def __init__(
         self, model: Model, count: int = PARTICLES, seed: int = 0, adaptive: bool = True
     ) -> None:
         self.model = model
         self.adaptive = adaptive
+        self.most = count
         self.rng = np.random.default_rng(seed)
         cell = model.cell
         open_cells = model.open_cells  # (row, column) of every open cell
@@ -92,8 +95,8 @@ class ParticleFilter:
     def sense(self, readings: Sequence[float]) -> None:
         """The measurement update, then resampling when the weights have thinned out. The
         first reading is weighed in stages (progressive correction): as if the sensors were
-        8, 4 then 2 in noisy, resampling all 4,000 and spreading them less each time, then as
-        they are; the spread particles are too far apart for the sharp weighing alone (it
+        8, 4 then 2 in noisy, resampling all of them and spreading them less each time, then
+        as they are; the spread particles are too far apart for the sharp weighing alone (it
         leaves one or two, often not where the robot is), while each stage keeps every place
         that nearly matches and lets its particles settle where it matches best."""
         readings = np.asarray(readings, dtype=float)
@@ -102,7 +105,7 @@ class ParticleFilter:
             for sigma in ANNEAL:
                 share = (SIGMA / sigma) ** 2 - done
                 self.weigh(readings, share)
-                self.resample(sigma / SIGMA, count=PARTICLES)
+                self.resample(sigma / SIGMA, count=self.most)
                 done += share
             self.weigh(readings, 1.0 - done)
             self.resample()  # to as many as the places it found need
@@ -131,7 +134,7 @@ class ParticleFilter:
             bins = np.floor(self.particles[index] / BIN).astype(np.int64)
             bins[:, 2] %= round(360.0 / BIN[2])
             k = len(np.unique(bins, axis=0))
-            index = self.draw(cumulative, min(max(kld_count(k), FEWEST), PARTICLES))
+            index = self.draw(cumulative, min(max(kld_count(k), FEWEST), self.most))
         n = len(index)
         jitter = self.rng.normal(0.0, np.multiply(JITTER, spread), (n, 3))
         self.particles = self.particles[index] + jitter
