@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from simmer import Simulation
+from simmer import Simulation, load_config, with_overrides
 from simmer.batch import NOISE_BLOCK, Batch, BatchError, Model
 
 from helpers import EXAMPLES, make_config, noisy_data
@@ -253,6 +253,44 @@ def test_the_particle_filter_example_localizes_on_the_lab_maze() -> None:
     assert math.hypot(x - truth.x, y - truth.y) < 3.0, (f.estimate(), truth)
     assert abs((heading - truth.heading + 180) % 360 - 180) < 15
     assert f.spread() < 3.0
+
+
+@pytest.mark.slow
+def test_the_particle_filter_keeps_every_place_that_matches_then_fewer_particles() -> None:
+    """The example's KLD-sampling and staged first reading: from the localization page's start
+    (1,6,90, 2% noise) its first reading keeps particles at the three places whose readings
+    match (the page's picture), about 1,000 of them; once one place is left the count falls to
+    the fewest; and for eight seeds (the robot's and the filter's) it ends within 2 in."""
+    example = load_example("particle_filter")
+    noise = {f"sensors.u{k}.error": 0.02 for k in range(4)} | {"scenario.start": "1,6,90"}
+    config = with_overrides(load_config(EXAMPLES / "lab1_rover.toml"), noise)
+    model = Model(config, ["u0", "u1", "u2", "u3"])
+    for seed in range(8):
+        sim = Simulation(config, seed=seed)
+        counts: list[int] = []
+        places: list[set[tuple[int, int]]] = []
+
+        def read(sim: Simulation = sim) -> list[float]:
+            return sim.command("u0,u1,u2,u3")
+
+        def drive(name: str, amount: float, sim: Simulation = sim) -> None:
+            sim.command(f"{name}-{amount!r}")
+            sim.run_until_idle()
+
+        def report(f: Any, counts: list[int] = counts, places: list[Any] = places) -> None:
+            cells = np.floor(f.particles[:, :2] / model.cell).astype(int)
+            found, many = np.unique(cells, axis=0, return_counts=True)
+            counts.append(len(f.particles))
+            places.append(
+                {(int(x), int(y)) for (x, y), n in zip(found, many, strict=True) if n >= 5}
+            )
+
+        f = example.localize(read, drive, model, 12, report, seed=seed)
+        assert {(1, 3), (4, 1), (6, 1)} <= places[0], (seed, places[0])
+        assert 500 < counts[0] < example.PARTICLES, (seed, counts)
+        assert counts[-1] == example.FEWEST, (seed, counts)
+        x, y, _ = f.estimate()
+        assert math.hypot(x - sim.robot.pose.x, y - sim.robot.pose.y) < 2.0, seed
 
 
 @pytest.mark.slow  # compiles the threaded kernel (Numba does not cache it)

@@ -59,8 +59,8 @@ def test_obstacle_avoidance_stops_short_of_the_wall() -> None:
 @pytest.mark.slow
 def test_the_particle_filter_example_localizes_and_shows_its_cloud() -> None:
     """particle_filter.py, run as the localization page says (the Lab 1 rover from the start
-    1,6,90): a show of its cloud (every fourth of 4,000 particles) at each reading, and the
-    run's outcome says the reported estimate localized."""
+    1,6,90): a show of its cloud at each reading (at most 2,000 particles, every fourth of
+    4,000, fewer as they agree), and the run's outcome says the reported estimate localized."""
     config = with_overrides(load_config(EXAMPLES / "lab1_rover.toml"), {"scenario.start": "1,6,90"})
     sim = Simulation(config, seed=3)
     outcome = Outcome.attach(sim)
@@ -71,7 +71,9 @@ def test_the_particle_filter_example_localizes_and_shows_its_cloud() -> None:
     assert run_program(sim, program).exit_status == 0
     shown = [json.loads(e.belief) for e in events if isinstance(e, BeliefEvent)]
     assert len(shown) == 3  # a reading before each of 2 moves, and one after the last
-    assert all(len(belief["particles"]) == 1000 for belief in shown)
+    counts = [len(belief["particles"]) for belief in shown]
+    assert all(0 < count <= 2000 for count in counts), counts
+    assert counts[-1] < counts[0], counts  # fewer particles once they agree (KLD-sampling)
     report = outcome.report().localization
     assert report is not None
     assert report.localized_at is not None
