@@ -45,12 +45,6 @@ class FullDisk:
         self.room -= len(part)
         return int(self.inner.write(part))
 
-    def fileno(self) -> int:
-        return int(self.inner.fileno())
-
-    def close(self) -> None:
-        self.inner.close()
-
 
 def check_files(folder: Path, rows: int) -> None:
     """Every line of events.jsonl whole and an event; trace.csv has ``rows`` whole rows."""
@@ -73,10 +67,8 @@ def test_a_full_disk_stops_the_recording_at_whole_lines_and_says_so(
     sim = Simulation(noisy_config(), seed=3)
     said: list[str] = []
     recorder = RunRecorder(sim, folder, on_stop=said.append)
-    if full == "events":
-        recorder.events._send = FullDisk(recorder.events._file, 3000).write
-    else:
-        recorder.trace._file = FullDisk(recorder.trace._file, 3000)
+    writer = recorder.events if full == "events" else recorder.trace
+    writer._send = FullDisk(writer._file, 3000).write
     drive_noisily(sim)  # the run goes on after the recording stops
     recorder.close()
     assert said == [f"the recording in {folder} stopped: disk full"]

@@ -70,10 +70,16 @@ NOT_FINITE = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf}
 
 class RecordingBudget:
     """Bytes a recording's files may still take (:data:`MAX_RECORDING_BYTES` unless told), shared
-    by its writers; :meth:`take` says whether a write fits."""
+    by its writers; :meth:`take` says whether a write fits. ``covers`` says which files it
+    bounds and how to raise it, for :meth:`why`."""
 
-    def __init__(self, limit: int = MAX_RECORDING_BYTES) -> None:
+    def __init__(
+        self,
+        limit: int = MAX_RECORDING_BYTES,
+        covers: str = "events.jsonl and trace.csv together; --record-limit MB raises it",
+    ) -> None:
         self.limit = limit
+        self.covers = covers
         self.used = 0
 
     def take(self, size: int) -> bool:
@@ -85,10 +91,7 @@ class RecordingBudget:
 
     def why(self) -> str:
         """Why the recording stopped, naming the limit and how to raise it."""
-        return (
-            f"it reached the size limit of {self.limit / 2**20:,.0f} MB "
-            "(events.jsonl and trace.csv together; --record-limit MB raises it)"
-        )
+        return f"it reached the size limit of {self.limit / 2**20:,.0f} MB ({self.covers})"
 
 
 def stop_reason(exc: OSError) -> str:
@@ -107,6 +110,58 @@ def write_all(write: Callable[[bytes], int | None], data: bytes) -> None:
 
 
 # ----------------------------------------------------------------------------- writing
+
+
+class BoundedFile:
+    """A run folder's file written in whole records (lines, rows), each in one system call,
+    within ``budget``: a write that does not fit, or fails (a full disk), stops the file. It is
+    cut back to its last whole record (which needs no space on a full disk), :attr:`stopped`
+    says why and ``on_stop`` is told; the run and its other files go on."""
+
+    def __init__(
+        self, path: str | Path, budget: RecordingBudget, on_stop: Callable[[str], None] | None
+    ) -> None:
+        self.path = Path(path)
+        self._file = self.path.open("wb", buffering=0)
+        self._send = self._file.write
+        self._budget = budget
+        self._on_stop = on_stop
+        self._size = 0
+        """Bytes of whole records in the file."""
+        self._closed = False
+        self.stopped: str | None = None
+        """Why the file stopped before the run ended (None: it did not)."""
+
+    def _put(self, data: bytes) -> bool:
+        """Write whole records if they fit the budget and the disk (True); else stop."""
+        if self.stopped is not None:
+            return False
+        if not self._budget.take(len(data)):
+            self.stop(self._budget.why())
+            return False
+        try:
+            write_all(self._send, data)
+        except OSError as exc:
+            self.stop(stop_reason(exc))
+            return False
+        self._size += len(data)
+        return True
+
+    def stop(self, reason: str) -> None:
+        """Write nothing more, cutting the file back to its last whole record, and say why
+        (again: nothing)."""
+        if self.stopped is not None:
+            return
+        self.stopped = reason
+        with suppress(OSError, ValueError):  # ValueError: closed already
+            os.ftruncate(self._file.fileno(), self._size)
+        if self._on_stop is not None:
+            self._on_stop(reason)
+
+    def _close_file(self) -> None:
+        self._closed = True
+        with suppress(OSError):
+            self._file.close()
 
 
 def _number(value: float) -> str:
@@ -224,12 +279,10 @@ def event_from_dict(data: dict[str, Any]) -> Event:
 # ----------------------------------------------------------------------------- the observer
 
 
-class EventLog:
-    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc).
-
-    The file takes its bytes from ``budget``. A write that does not fit, or fails (a full
-    disk), stops the log: the file is cut back to its last whole line, :attr:`stopped` says
-    why and ``on_stop`` is called with it; the run goes on unrecorded."""
+class EventLog(BoundedFile):
+    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc),
+    its bytes taken from ``budget`` (:class:`BoundedFile`: a write that does not fit or fails
+    stops the log; the run goes on unrecorded)."""
 
     def __init__(
         self,
@@ -237,17 +290,8 @@ class EventLog:
         budget: RecordingBudget | None = None,
         on_stop: Callable[[str], None] | None = None,
     ) -> None:
-        self.path = Path(path)
-        self._file = self.path.open("wb", buffering=0)
-        self._send = self._file.write
-        self._closed = False
+        super().__init__(path, budget or RecordingBudget(), on_stop)
         self._last_step: StepEvent | None = None
-        self._budget = budget or RecordingBudget()
-        self._on_stop = on_stop
-        self._size = 0
-        """Bytes of whole lines in the file."""
-        self.stopped: str | None = None
-        """Why the log stopped before the run ended (None: it did not)."""
         self.written = 0
         """Events written so far."""
 
@@ -262,28 +306,8 @@ class EventLog:
         self._write(event_line(event).encode("utf-8"))
 
     def _write(self, line: bytes) -> None:
-        """One line, in one system call (more only if the system writes part of it)."""
-        if not self._budget.take(len(line)):
-            self.stop(self._budget.why())
-            return
-        try:
-            write_all(self._send, line)
-        except OSError as exc:
-            self.stop(stop_reason(exc))
-            return
-        self._size += len(line)
-        self.written += 1
-
-    def stop(self, reason: str) -> None:
-        """Write nothing more, cutting the file back to its last whole line (which needs no
-        space on a full disk), and say why (again: nothing)."""
-        if self.stopped is not None:
-            return
-        self.stopped = reason
-        with suppress(OSError, ValueError):  # ValueError: closed already
-            os.ftruncate(self._file.fileno(), self._size)
-        if self._on_stop is not None:
-            self._on_stop(reason)
+        if self._put(line):
+            self.written += 1
 
     def close(self) -> None:
         """Write the run's last step if nothing came after it, and close the file (again:
@@ -292,6 +316,4 @@ class EventLog:
             return
         if self._last_step is not None and self.stopped is None:
             self._write(event_line(self._last_step).encode("utf-8"))
-        self._closed = True
-        with suppress(OSError):
-            self._file.close()
+        self._close_file()

@@ -23,15 +23,13 @@ trace's budget so that scans never cut a replayable recording short. Read back o
 from __future__ import annotations
 
 import functools
-import os
 from collections.abc import Callable
-from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
 
 from simmer.devices.lidar import Lidar
-from simmer.record.eventlog import stop_reason, write_all
+from simmer.record.eventlog import BoundedFile, RecordingBudget
 from simmer.world.events import Event, ResetEvent, StepEvent
 from simmer.world.simulation import Simulation
 
@@ -60,7 +58,7 @@ def _cell_format(count: int) -> str:
     return " ".join(["%.3f"] * count)
 
 
-class ScanWriter:
+class ScanWriter(BoundedFile):
     """An observer writing ``scans.csv`` (see the module doc) for ``sim``'s LiDARs: after each
     step, the scans made since the last one. ``on_stop`` is told why if the file stops."""
 
@@ -71,15 +69,10 @@ class ScanWriter:
         max_bytes: int = MAX_SCAN_BYTES,
         on_stop: Callable[[str], None] | None = None,
     ) -> None:
-        self.path = Path(path)
+        budget = RecordingBudget(max_bytes, "MAX_SCAN_BYTES; the run's other files go on")
+        told = None if on_stop is None else lambda why: on_stop(f"{Path(path).name} stopped: {why}")
+        super().__init__(path, budget, told)
         self.sim = sim
-        self.max_bytes = max_bytes
-        self._on_stop = on_stop
-        self._file = self.path.open("wb", buffering=0)
-        self._size = 0
-        self._closed = False
-        self.stopped: str | None = None
-        """Why the file stopped before the run ended (None: it did not)."""
         self.scans = 0
         """Scans in the file."""
         self._lidars: list[tuple[str, Lidar]] = []
@@ -112,38 +105,11 @@ class ScanWriter:
             self._find()
 
     def _write(self, text: str, scans: int) -> None:
-        """Write whole rows if they fit :attr:`max_bytes` and the disk; else stop."""
-        if self.stopped is not None or self._closed:
-            return
-        data = text.encode("ascii")
-        if self._size + len(data) > self.max_bytes:
-            self.stop(
-                f"it reached the size limit of {self.max_bytes / 2**20:,.0f} MB "
-                "(MAX_SCAN_BYTES); the run's other files go on"
-            )
-            return
-        try:
-            write_all(self._file.write, data)
-        except OSError as exc:
-            self.stop(stop_reason(exc))
-            return
-        self._size += len(data)
-        self.scans += scans
-
-    def stop(self, reason: str) -> None:
-        """Write nothing more, cutting the file back to its last whole row (again: nothing)."""
-        if self.stopped is not None:
-            return
-        self.stopped = reason
-        with suppress(OSError, ValueError):
-            os.ftruncate(self._file.fileno(), self._size)
-        if self._on_stop is not None:
-            self._on_stop(f"{self.path.name} stopped: {reason}")
+        """Write whole rows if they fit :data:`MAX_SCAN_BYTES` and the disk; else stop."""
+        if not self._closed and self._put(text.encode("ascii")):
+            self.scans += scans
 
     def close(self) -> None:
         """Close the file (again: nothing)."""
-        if self._closed:
-            return
-        self._closed = True
-        with suppress(OSError):
-            self._file.close()
+        if not self._closed:
+            self._close_file()

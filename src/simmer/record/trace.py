@@ -28,15 +28,13 @@ fit, or fails (a full disk), stops the trace at its last whole row, and
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable, Sequence
-from contextlib import suppress
 from pathlib import Path
 
 from simmer.geometry import Pose
 from simmer.protocol import command_ids, parse_command
-from simmer.record.eventlog import RecordingBudget, stop_reason, write_all
+from simmer.record.eventlog import BoundedFile, RecordingBudget
 from simmer.world.events import CollisionEvent, CommandEvent, Event, ResetEvent, StepEvent
 
 TRACE_RATE = 30.0
@@ -72,7 +70,7 @@ def trace_columns(sensors: Sequence[str]) -> list[str]:
     return [*POSE_COLUMNS, *sensors]
 
 
-class TraceWriter:
+class TraceWriter(BoundedFile):
     """An observer writing ``trace.csv`` (see the module doc) for these ``sensors`` (ids) at
     ``frame_rate`` steps a second."""
 
@@ -84,15 +82,7 @@ class TraceWriter:
         budget: RecordingBudget | None = None,
         on_stop: Callable[[str], None] | None = None,
     ) -> None:
-        self.path = Path(path)
-        self._file = self.path.open("wb", buffering=0)
-        self._closed = False
-        self._budget = budget or RecordingBudget()
-        self._on_stop = on_stop
-        self._size = 0
-        """Bytes of whole rows (and the header) in the file."""
-        self.stopped: str | None = None
-        """Why the trace stopped before the run ended (None: it did not)."""
+        super().__init__(path, budget or RecordingBudget(), on_stop)
         self._made = 0
         """Rows made, written or waiting to be."""
         self.rows = 0
@@ -190,31 +180,14 @@ class TraceWriter:
 
     def _write(self, text: str, rows: int) -> None:
         """Write ``rows`` whole rows (``text``) if they fit the budget and the disk; else stop."""
-        if self.stopped is not None:
-            return
-        data = text.encode("utf-8")
-        if not self._budget.take(len(data)):
-            self.stop(self._budget.why())
-            return
-        try:
-            write_all(self._file.write, data)
-        except OSError as exc:
-            self.stop(stop_reason(exc))
-            return
-        self._size += len(data)
-        self.rows += rows
+        if self._put(text.encode("utf-8")):
+            self.rows += rows
 
     def stop(self, reason: str) -> None:
-        """Write nothing more, cutting the file back to its last whole row, and say why
-        (again: nothing)."""
-        if self.stopped is not None:
-            return
-        self.stopped = reason
+        """Write nothing more (the rows held are dropped), cutting the file back to its last
+        whole row, and say why (again: nothing)."""
         self._rows.clear()
-        with suppress(OSError, ValueError):  # ValueError: closed already
-            os.ftruncate(self._file.fileno(), self._size)
-        if self._on_stop is not None:
-            self._on_stop(reason)
+        super().stop(reason)
 
     def close(self) -> None:
         """Write the last step's row if it has none yet, and close the file (again: nothing)."""
@@ -222,7 +195,5 @@ class TraceWriter:
             return
         if self._last is not None:
             self._row(self._last.time, self._last.step, self._last.pose)
-        self._closed = True
         self._flush()
-        with suppress(OSError):
-            self._file.close()
+        self._close_file()
