@@ -280,9 +280,11 @@ def event_from_dict(data: dict[str, Any]) -> Event:
 
 
 class EventLog(BoundedFile):
-    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc),
-    its bytes taken from ``budget`` (:class:`BoundedFile`: a write that does not fit or fails
-    stops the log; the run goes on unrecorded)."""
+    """An observer writing every event but the steps to ``events.jsonl`` (see the module doc).
+
+    The file takes its bytes from ``budget``. A write that does not fit, or fails (a full
+    disk), stops the log (as :meth:`stop` does): the file is cut back to its last whole line,
+    :attr:`stopped` says why and ``on_stop`` is called with it; the run goes on unrecorded."""
 
     def __init__(
         self,
