@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from simmer import Simulation
 from simmer.cli import app
-from simmer.devices.lidar import Lidar
+from simmer.devices.lidar import ZIGGURAT_R, Lidar, fill_normals, standard_normals
 
 from helpers import default_data, make_sim
 
@@ -200,6 +200,52 @@ def test_noise_statistics_over_100000_beams_match_the_settings() -> None:
     # Each beam dropped independently (drops drawn as the gaps between them): two neighbours
     # both dropped at the chance squared.
     assert abs(both / pairs - drop**2) < 4 * math.sqrt(drop**2 / pairs)
+
+
+def normal_tail(c: float) -> float:
+    """The chance that a standard normal lies beyond ``c`` on either side."""
+    return math.erfc(c / math.sqrt(2.0))
+
+
+def test_the_noises_normals_have_a_standard_normals_moments_and_tails() -> None:
+    # The LiDAR's normals come from the device's bit stream by the ziggurat method
+    # (standard_normals): 2,000,000 of them, each figure within 5 standard errors.
+    n = 2_000_000
+    z = np.empty(n)
+    standard_normals(np.random.default_rng(11), z)
+    assert abs(z.mean()) < 5 / math.sqrt(n)
+    assert abs(z.var() - 1.0) < 5 * math.sqrt(2 / n)
+    assert abs(np.mean(z**3)) < 5 * math.sqrt(15 / n)  # skewness 0
+    assert abs(np.mean(z**4) - 3.0) < 5 * math.sqrt(96 / n)  # kurtosis 3
+    # The tails, the ziggurat's tail beyond r (its own algorithm) included, on both sides.
+    for c in (1.0, 2.0, 3.0, ZIGGURAT_R, 4.0):
+        expected = n * normal_tail(c)
+        assert abs(np.count_nonzero(np.abs(z) > c) - expected) < 5 * math.sqrt(expected), c
+    assert abs(
+        np.count_nonzero(z > ZIGGURAT_R) - np.count_nonzero(z < -ZIGGURAT_R)
+    ) < 5 * math.sqrt(n * normal_tail(ZIGGURAT_R))
+    # The whole shape: 60 bins of equal chance, a chi-square well within its spread.
+    cuts = np.quantile(np.random.default_rng(0).standard_normal(4_000_000), np.linspace(0, 1, 61))
+    cuts[0], cuts[-1] = -np.inf, np.inf
+    chances = np.diff([0.5 * math.erfc(-c / math.sqrt(2.0)) for c in cuts])
+    counts = np.histogram(z, cuts)[0]
+    chi2 = float((((counts - n * chances) ** 2) / (n * chances)).sum())
+    assert chi2 < 59 + 5 * math.sqrt(2 * 59)
+
+
+def test_the_normals_of_a_seed_are_the_same_however_the_bits_run_out() -> None:
+    # fill_normals stops when its bits run out; standard_normals then draws more: a seed
+    # always gives the same normals, and a short supply fills only part.
+    a, b = np.empty(5000), np.empty(5000)
+    standard_normals(np.random.default_rng(3), a)
+    standard_normals(np.random.default_rng(3), b)
+    np.testing.assert_array_equal(a, b)
+    bits = np.random.default_rng(3).bit_generator.random_raw(100)
+    short = np.zeros(5000)
+    filled = fill_normals(bits, short, 0)
+    assert 90 <= filled <= 100
+    assert np.all(short[filled:] == 0.0)
+    assert fill_normals(bits, short, 5000) == 5000
 
 
 def test_angular_jitter_moves_beams_by_its_sd() -> None:
