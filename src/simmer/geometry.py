@@ -447,11 +447,12 @@ def scan_revolution(
 ) -> int:
     """One LiDAR revolution, whole: beam k is measured at ``start + offsets[k]`` (skew; else
     all at ``end``), from the robot pose then, interpolated along ``track`` (flat: time, x, y,
-    heading unwrapped, time, ...; the heading is ``heading_now`` plus the turn since the last
-    pose, so it is exact while the robot stands still); the beams are cast (:func:`cast_beam`'s
-    body) from the device mounted at (px, py) in the robot frame along ``vectors`` (2, n: each
-    beam's unit vector at heading 0, the mount's rotation included) turned by the pose's
-    heading, then the noise. ``state``: cell, see_block, heading_now, start, end, skew, px, py,
+    heading in [0, 360), time, ...; the headings are unwrapped here, in place, and a beam's
+    heading is the last pose's plus the turn since then, so it is exact while the robot stands
+    still); the beams are cast (:func:`cast_beam`'s body) from the device mounted at (px, py)
+    in the robot frame along ``vectors`` (2, n: each beam's unit vector at heading 0, the
+    mount's rotation included) turned by the pose's heading, then the noise. ``state``: cell,
+    see_block, start, end, skew, px, py,
     min_range, max_range, range_error, range_error_proportional, dropout, angular_jitter
     (radians), where this revolution's standard normals start in ``normals``, the jitter's and
     the range error's (-1: that noise is off), and the dropout's place in ``gaps`` (the beams
@@ -466,14 +467,21 @@ def scan_revolution(
     not turning has one heading all revolution), none a beam (its vector is turned; its
     jitter by a series), a draw a dropped beam (not a uniform a beam), and one compiled call
     a scan with few arguments."""
-    cell, see_block, heading_now = state[0], state[1] != 0.0, state[2]
-    start, end, skew = state[3], state[4], state[5] != 0.0
-    px, py, low, high = state[6], state[7], state[8], state[9]
-    const, prop, jitter = state[10], state[11], state[13]
-    jn, rn, gap, left = int(state[14]), int(state[15]), int(state[16]), state[17]
+    cell, see_block = state[0], state[1] != 0.0
+    start, end, skew = state[2], state[3], state[4] != 0.0
+    px, py, low, high = state[5], state[6], state[7], state[8]
+    const, prop, jitter = state[9], state[10], state[12]
+    jn, rn, gap, left = int(state[13]), int(state[14]), int(state[15]), state[16]
     n = true.shape[0]
     m = track.shape[0] // 4
-    last = track[4 * m - 1]
+    heading_now = track[4 * m - 1]
+    last = track[3]
+    for i in range(7, 4 * m, 4):  # unwrapped: each within a half turn of the one before
+        h = track[i]
+        if not -180.0 < last - h < 180.0:
+            h += 360.0 * round((last - h) / 360.0)
+            track[i] = h
+        last = h
     j = 0
     for k in range(n):
         t = start + offsets[k] if skew else end
@@ -540,6 +548,6 @@ def scan_revolution(
             points[k, 0] = ox + dx * d
             points[k, 1] = oy + dy * d
     if gap >= 0:
-        state[16] = gap
-        state[17] = left
+        state[15] = gap
+        state[16] = left
     return kept

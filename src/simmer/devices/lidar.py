@@ -221,17 +221,16 @@ class Lidar(Device):
         """Each beam's unit vector (2, beams: x row, y row) at robot heading 0, the mount's
         rotation included: a scan turns them by the robot's heading."""
         self._track: list[float] = []
-        """The revolution under way's steps, flat (time, x, y, heading unwrapped, time, ...):
-        a list appended to each step and made an array once a scan, the cheapest way per
-        step."""
+        """The revolution under way's steps, flat (time, x, y, heading, time, ...; the heading
+        as the robot has it, in [0, 360): the kernel unwraps it): a list appended to each step
+        and made an array once a scan, the cheapest way per step."""
         self._beam_poses = np.empty((n, 3))
         self._true = np.empty(n)
         self._offsets = self.period * (np.arange(n) / n)
         """When each beam is measured after its revolution starts, seconds."""
         self._state = np.array(
             [
-                0.0,  # the maze's cell, the block seen, the heading now, start, end, skew:
-                0.0,  # set each scan
+                0.0,  # the maze's cell, the block seen, start, end, skew: set each scan
                 0.0,
                 0.0,
                 0.0,
@@ -268,8 +267,6 @@ class Lidar(Device):
         """Revolutions of the drawn noise used (NOISE_SCANS: none left)."""
         self._due = self.period - 1e-9
         """When the revolution under way ends (a hair early: steps' times are sums)."""
-        self._heading = 0.0
-        """The heading of the latest pose recorded, as the robot has it (in [0, 360))."""
 
     def height(self, world: World) -> float:
         """The scan plane's height: ``height``, else the third position value, else the
@@ -285,41 +282,45 @@ class Lidar(Device):
     # -- stepping ------------------------------------------------------------------------
 
     def _record(self, world: World) -> float:
-        """Keep the robot's pose now (its heading unwrapped from the last one's), and the
-        first scan (at the start pose) if none is made yet; the time now. Called every step:
-        kept lean (a step without a scan costs the LiDAR a few tenths of a microsecond)."""
-        now = world.time
+        """Keep the robot's pose now, and the first scan (at the start pose) if none is made
+        yet; the time now (:meth:`update` does the same, written out)."""
         track = self._track
         if not track:
             self._first(world)
-        if now <= track[-4]:
-            return now
-        x, y, heading = world.robot.pose
-        last = track[-1]
-        if -180.0 < last - heading < 180.0:  # within a half turn of the last: as it is
-            track += (now, x, y, heading)
-        else:
-            track += (now, x, y, heading + 360.0 * round((last - heading) / 360.0))
-        self._heading = heading
+        now = world.time
+        if now > track[-4]:
+            track.append(now)
+            track += world.robot.pose
         return now
 
     def _first(self, world: World) -> None:
         """The first pose recorded and the scan the spinning LiDAR made there before the run
         began (the start pose's, if the run has begun)."""
         start = world.robot.start_pose if world.time > 0.0 else world.robot.pose
-        self._track += (0.0, start.x, start.y, start.heading)
-        self._heading = start.heading
+        self._track.append(0.0)
+        self._track += start
         self._scan(world, 0.0, skew=False)
 
     def update(self, world: World) -> None:
-        """Record this step's pose; cast every scan whose revolution has ended."""
-        now = self._record(world)
-        if now < self._due:
-            return
+        """Record this step's pose (:meth:`_record`'s body: called every step, a call costs
+        about a third of it); cast every scan whose revolution has ended."""
+        track = self._track
+        if not track:
+            self._first(world)
+        now = world.time
+        if now > track[-4]:
+            track.append(now)
+            track += world.robot.pose  # its heading as the robot has it: the kernel unwraps
+        if now >= self._due:
+            self._revolve(world, now)
+
+    def _revolve(self, world: World, now: float) -> None:
+        """Cast every revolution ended by ``now``; drop the poses before the revolution under
+        way (the one before it stays)."""
         kept = 0
         while now >= self._due:
             kept = self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
-        if kept:  # drop the poses before the revolution under way (the one before it stays)
+        if kept:
             del self._track[: 4 * kept]
 
     def _scan(self, world: World, end: float, *, skew: bool) -> int:
@@ -334,22 +335,21 @@ class Lidar(Device):
         jitter, ranged = self._rows
         if jitter or ranged:
             first = used * (jitter + ranged) * n
-            state[14] = first if jitter else -1.0
-            state[15] = first + jitter * n if ranged else -1.0
-        if self.settings.dropout and not 0.0 <= state[16] <= len(self._gaps) - n:
+            state[13] = first if jitter else -1.0
+            state[14] = first + jitter * n if ranged else -1.0
+        if self.settings.dropout and not 0.0 <= state[15] <= len(self._gaps) - n:
             self._gaps[:] = self.rng.geometric(self.settings.dropout, len(self._gaps))
-            if state[16] < 0.0:  # the first: the beams before the first drop
-                state[17] = self._gaps[0] - 1.0
-                state[16] = 1.0
+            if state[15] < 0.0:  # the first: the beams before the first drop
+                state[16] = self._gaps[0] - 1.0
+                state[15] = 1.0
             else:
-                state[16] = 0.0
+                state[15] = 0.0
         maze = world.maze
         state[0] = maze.cell
         state[1] = self.sees_block(world)
-        state[2] = self._heading
-        state[3] = end - self.period
-        state[4] = end
-        state[5] = skew
+        state[2] = end - self.period
+        state[3] = end
+        state[4] = skew
         kept: int = scan_revolution(
             maze.hwall,
             maze.vwall,
