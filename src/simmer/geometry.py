@@ -512,43 +512,39 @@ def scan_revolution(
     block: FloatArray,
     track: FloatArray,
     state: FloatArray,
-    offsets: FloatArray,
     vectors: FloatArray,
     normals: FloatArray,
     gaps: FloatArray,
-    beam_poses: FloatArray,
-    true: FloatArray,
     distances: FloatArray,
     points: FloatArray,
 ) -> int:
-    """One LiDAR revolution, whole: beam k is measured at ``start + offsets[k]`` (skew; else
-    all at ``end``), from the robot pose then, interpolated along ``track`` (flat: time, x, y,
-    heading in [0, 360), time, ...; the headings are unwrapped here, in place, and a beam's
-    heading is the last pose's plus the turn since then, so it is exact while the robot stands
-    still); the beams are cast (:func:`lidar_beam`) from the device mounted at (px, py)
-    in the robot frame along ``vectors`` (2, n: each beam's unit vector at heading 0, the
-    mount's rotation included) turned by the pose's heading, then the noise. ``state``: cell,
-    see_block, start, end, skew, px, py,
-    min_range, max_range, range_error, range_error_proportional, dropout, angular_jitter
-    (radians), where this revolution's standard normals start in ``normals``, the jitter's and
-    the range error's (-1: that noise is off), and the dropout's place in ``gaps`` (the beams
-    from one dropped beam to the next, geometric draws): the next gap's index (-1: no dropout)
-    and the beams to pass before the next dropped one, both updated. Fills ``beam_poses``,
-    ``true`` (noise-free distance of the jittered beam, inf: no hit), ``distances`` (0: no
-    return) and ``points`` (where each beam met something, NaN where it returned nothing);
-    returns the index of the last pose at or before ``end`` (the
-    poses before it are no longer needed).
+    """One LiDAR revolution, whole: beam k of n is measured at ``start + (end - start) · k / n``
+    (skew; else all at ``end``), from the robot pose then, interpolated along ``track`` (flat:
+    time, x, y, heading in [0, 360), time, ...; the headings are unwrapped here, in place, and
+    a beam's heading is the last pose's plus the turn since then, so it is exact while the
+    robot stands still); the beam is cast (:func:`lidar_beam`) from the device mounted at
+    (px, py) in the robot frame along its ``vectors`` column (2, n: each beam's unit vector at
+    heading 0, the mount's rotation included) turned by the pose's heading, then its noise.
+    ``state``: cell, see_block, start, end, skew, px, py, min_range, max_range, range_error,
+    range_error_proportional, dropout, angular_jitter (radians), where this revolution's
+    standard normals start in ``normals``, the jitter's and the range error's (-1: that noise
+    is off), and the dropout's place in ``gaps`` (the beams from one dropped beam to the next,
+    geometric draws): the next gap's index (-1: no dropout) and the beams to pass before the
+    next dropped one, both updated. Fills ``distances`` (0: no return) and ``points`` (where
+    each beam met something, NaN where it returned nothing); returns the index of the last
+    pose at or before ``end`` (the poses before it are no longer needed).
 
-    Speed (a 360-beam scan is some microseconds): one sine and cosine a pose heading (a robot
-    not turning has one heading all revolution), none a beam (its vector is turned; its
-    jitter by a series), a draw a dropped beam (not a uniform a beam), and one compiled call
-    a scan with few arguments."""
+    Speed (a 360-beam scan is some microseconds, most of it memory the steps between scans
+    have pushed out of the cache): one pass over the beams that writes only the readings; one
+    sine and cosine a pose heading (a robot not turning has one heading all revolution), none
+    a beam (its vector is turned; its jitter by a series); a division a step of the track, not
+    a beam; a draw a dropped beam (not a uniform a beam); one compiled call a scan."""
     cell, see_block = state[0], state[1] != 0.0
     start, end, skew = state[2], state[3], state[4] != 0.0
     px, py, low, high = state[5], state[6], state[7], state[8]
     const, prop, jitter = state[9], state[10], state[12]
     jn, rn, gap, left = int(state[13]), int(state[14]), int(state[15]), state[16]
-    n = true.shape[0]
+    n = distances.shape[0]
     m = track.shape[0] // 4
     heading_now = track[4 * m - 1]
     last = track[3]
@@ -558,11 +554,14 @@ def scan_revolution(
             h += 360.0 * round((last - h) / 360.0)
             track[i] = h
         last = h
+    period = end - start
     j = 0
-    span = -1  # the step whose 1 / duration ``inverse`` is: a division a step, not a beam
+    span = -1  # the step whose 1 / duration ``inverse`` is
     inverse = 0.0
+    heading = math.nan
+    c = s = 0.0
     for k in range(n):
-        t = start + offsets[k] if skew else end
+        t = start + period * (k / n) if skew else end
         while j + 1 < m and track[4 * j + 4] < t:
             j += 1
         if t <= track[0] or m == 1:
@@ -579,30 +578,20 @@ def scan_revolution(
             y = track[i + 2] + f * (track[i + 6] - track[i + 2])
             a = track[i + 3] - last
             turn = a + f * ((track[i + 7] - last) - a)
-        beam_poses[k, 0] = x
-        beam_poses[k, 1] = y
-        beam_poses[k, 2] = heading_now + turn
-    kept = 0
-    while kept + 1 < m and track[4 * kept + 4] <= end:
-        kept += 1
-    heading = math.nan
-    c = s = 0.0
-    for k in range(n):
-        rh = beam_poses[k, 2]
+        rh = heading_now + turn
         if rh != heading:
             heading = rh
             rad = math.radians(rh)
             c = math.cos(rad)
             s = math.sin(rad)
-        ox = beam_poses[k, 0] + px * c - py * s
-        oy = beam_poses[k, 1] + px * s + py * c
+        ox = x + px * c - py * s
+        oy = y + px * s + py * c
         ex, ey = vectors[0, k], vectors[1, k]
         dx = c * ex - s * ey
         dy = s * ex + c * ey
         if jn >= 0:
             dx, dy = _turned(dx, dy, jitter * normals[jn + k])
         d = lidar_beam(hwall, vwall, cell, fallback, block, see_block, ox, oy, dx, dy, high)
-        true[k] = d
         if d != math.inf and rn >= 0:
             d = d + (const + prop * d) * normals[rn + k]
         dropped = False
@@ -624,4 +613,7 @@ def scan_revolution(
     if gap >= 0:
         state[15] = gap
         state[16] = left
+    kept = 0
+    while kept + 1 < m and track[4 * kept + 4] <= end:
+        kept += 1
     return kept

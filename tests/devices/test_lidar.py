@@ -154,18 +154,33 @@ def test_a_turning_robots_scan_is_smeared_and_a_still_one_is_not() -> None:
         sim = make_sim(lidar_data(**QUIET, motion_skew=skew))
         device = lidar(sim)
         sim.command("r0-360")  # 120 deg/s: 22 degrees within one revolution
-        next_scan(sim, device)
-        next_scan(sim, device)
-        scans[skew] = (device.distances.copy(), device._beam_poses.copy(), sim)
-    skewed, beam_poses, sim = scans[True]
-    # Each beam of the smeared scan is the still scan at the pose the robot had then.
-    headings = beam_poses[:, 2]
-    assert 20.0 < headings[-1] - headings[0] < 23.0
+        track = [(sim.time, *sim.robot.pose)]  # every step's pose, kept here
+        for _ in range(2):
+            number = device.number
+            while device.number == number:
+                sim.step()
+                track.append((sim.time, *sim.robot.pose))
+        scans[skew] = (device.distances.copy(), np.array(track), device.scan_time, sim)
+    skewed, track, end, sim = scans[True]
+    # Beam k of n is measured at start + (end - start)·k/n, from the pose the robot had then:
+    # interpolated here between the steps around it (the heading unwrapped).
+    period = 1.0 / 5.5
+    times = end - period + period * np.arange(360) / 360
+    headings = np.unwrap(track[:, 3], period=360.0)
+    beam_poses = np.column_stack(
+        [np.interp(times, track[:, 0], column) for column in (track[:, 1], track[:, 2], headings)]
+    )
+    assert 20.0 < beam_poses[-1, 2] - beam_poses[0, 2] < 23.0
     for k in range(0, 360, 7):
         want = sim.expected(beam_poses[k : k + 1], ["l0"])[0, k]
-        assert skewed[k] == pytest.approx(want, abs=1e-9)
-    still, end_poses, _ = scans[False]
-    assert np.ptp(end_poses[:, 2]) == 0.0  # the unskewed scan: one pose for all beams
+        assert skewed[k] == pytest.approx(want, abs=1e-6)
+    # The unskewed scan: every beam from the pose at the scan's end.
+    still, track, end, sim = scans[False]
+    headings = np.unwrap(track[:, 3], period=360.0)
+    at_end = np.array(
+        [[np.interp(end, track[:, 0], c) for c in (track[:, 1], track[:, 2], headings)]]
+    )
+    np.testing.assert_allclose(still, sim.expected(at_end, ["l0"])[0], rtol=0.0, atol=1e-6)
     assert (np.abs(skewed - still) > 0.5).sum() > 20
 
 

@@ -224,10 +224,6 @@ class Lidar(Device):
         """The revolution under way's steps, flat (time, x, y, heading, time, ...; the heading
         as the robot has it, in [0, 360): the kernel unwraps it): a list appended to each step
         and made an array once a scan, the cheapest way per step."""
-        self._beam_poses = np.empty((n, 3))
-        self._true = np.empty(n)
-        self._offsets = self.period * (np.arange(n) / n)
-        """When each beam is measured after its revolution starts, seconds."""
         self._state = np.array(
             [
                 0.0,  # the maze's cell, the block seen, start, end, skew: set each scan
@@ -357,12 +353,9 @@ class Lidar(Device):
             world.block.segments,
             np.array(self._track, dtype=np.float64),  # the dtype given: twice as fast
             state,
-            self._offsets,
             self.vectors,
             self._normals,
             self._gaps,
-            self._beam_poses,
-            self._true,
             self.distances,
             self.points,
         )
