@@ -518,29 +518,31 @@ def scan_revolution(
     distances: FloatArray,
     points: FloatArray,
 ) -> int:
-    """One LiDAR revolution, whole: beam k of n is measured at ``start + (end - start) · k / n``
-    (skew; else all at ``end``), from the robot pose then, interpolated along ``track`` (flat:
-    time, x, y, heading in [0, 360), time, ...; the headings are unwrapped here, in place, and
-    a beam's heading is the last pose's plus the turn since then, so it is exact while the
-    robot stands still); the beam is cast (:func:`lidar_beam`) from the device mounted at
-    (px, py) in the robot frame along its ``vectors`` column (2, n: each beam's unit vector at
-    heading 0, the mount's rotation included) turned by the pose's heading, then its noise.
-    ``state``: cell, see_block, start, end, skew, px, py, min_range, max_range, range_error,
-    range_error_proportional, dropout, angular_jitter (radians), where this revolution's
-    standard normals start in ``normals``, the jitter's and the range error's (-1: that noise
-    is off), and the dropout's place in ``gaps`` (the beams from one dropped beam to the next,
-    geometric draws): the next gap's index (-1: no dropout) and the beams to pass before the
-    next dropped one, both updated. Fills ``distances`` (0: no return) and ``points`` (where
-    each beam met something, NaN where it returned nothing); returns the index of the last
-    pose at or before ``end`` (the poses before it are no longer needed).
+    """One LiDAR revolution, whole: beam k of n is measured at ``start + period · k / n``
+    (``start``: ``end - period``; skew; else all at ``end``), from the robot pose then,
+    interpolated along ``track`` (flat: time, x, y, heading in [0, 360), time, ...; the
+    headings are unwrapped here, in place, and a beam's heading is the last pose's plus the
+    turn since then, so it is exact while the robot stands still); the beam is cast
+    (:func:`lidar_beam`) from the device mounted at (px, py) in the robot frame along its
+    ``vectors`` column (2, n: each beam's unit vector at heading 0, the mount's rotation
+    included) turned by the pose's heading, then its noise. ``state``: cell, see_block,
+    period, end, skew, px, py, min_range, max_range, range_error, range_error_proportional,
+    dropout, angular_jitter (radians), where this revolution's standard normals start in
+    ``normals``, the jitter's and the range error's (-1: that noise is off; both moved on to
+    the next revolution's), and the dropout's place in ``gaps`` (the beams from one dropped
+    beam to the next, geometric draws): the next gap's index (-1: no dropout) and the beams
+    to pass before the next dropped one, both updated. Fills ``distances`` (0: no return) and
+    ``points`` (where each beam met something, NaN where it returned nothing); returns the
+    index of the last pose at or before ``end`` (the poses before it are no longer needed).
 
     Speed (a 360-beam scan is some microseconds, most of it memory the steps between scans
     have pushed out of the cache): one pass over the beams that writes only the readings; one
     sine and cosine a pose heading (a robot not turning has one heading all revolution), none
     a beam (its vector is turned; its jitter by a series); a division a step of the track, not
     a beam; a draw a dropped beam (not a uniform a beam); one compiled call a scan."""
-    cell, see_block = state[0], state[1] != 0.0
-    start, end, skew = state[2], state[3], state[4] != 0.0
+    cell, see_block, period = state[0], state[1] != 0.0, state[2]
+    end, skew = state[3], state[4] != 0.0
+    start = end - period
     px, py, low, high = state[5], state[6], state[7], state[8]
     const, prop, jitter = state[9], state[10], state[12]
     jn, rn, gap, left = int(state[13]), int(state[14]), int(state[15]), state[16]
@@ -554,7 +556,6 @@ def scan_revolution(
             h += 360.0 * round((last - h) / 360.0)
             track[i] = h
         last = h
-    period = end - start
     j = 0
     span = -1  # the step whose 1 / duration ``inverse`` is
     inverse = 0.0
@@ -613,6 +614,11 @@ def scan_revolution(
     if gap >= 0:
         state[15] = gap
         state[16] = left
+    rows = (jn >= 0) + (rn >= 0)  # the next revolution's normals
+    if jn >= 0:
+        state[13] = jn + rows * n
+    if rn >= 0:
+        state[14] = rn + rows * n
     kept = 0
     while kept + 1 < m and track[4 * kept + 4] <= end:
         kept += 1

@@ -226,11 +226,11 @@ class Lidar(Device):
         and made an array once a scan, the cheapest way per step."""
         self._state = np.array(
             [
-                0.0,  # the maze's cell, the block seen, start, end, skew: set each scan
+                0.0,  # the maze's cell, the block seen: set at the first scan
                 0.0,
-                0.0,
-                0.0,
-                0.0,
+                self.period,
+                0.0,  # the revolution's end: set each scan
+                float(params.motion_skew),
                 self.position.x,
                 self.position.y,
                 params.min_range,
@@ -239,14 +239,14 @@ class Lidar(Device):
                 params.range_error_proportional,
                 params.dropout,
                 math.radians(params.angular_jitter),
-                -1.0,  # where this revolution's normals start (-1: that noise is off)
-                -1.0,
+                -1.0,  # where this revolution's normals start (-1: that noise is off): set
+                -1.0,  # at each draw, moved on a revolution by the kernel
                 -1.0,  # the next gap between dropped beams; the beams before the next drop
                 0.0,
             ]
         )
         """:func:`~simmer.geometry.scan_revolution`'s numbers, in one array (each argument of
-        a compiled call costs)."""
+        a compiled call costs), each written only when it changes (a write costs too)."""
         ranged = bool(params.range_error or params.range_error_proportional)
         self._rows = (bool(params.angular_jitter), ranged)
         """Which rows of standard normals a revolution draws: its beams' jitter, their range
@@ -261,6 +261,8 @@ class Lidar(Device):
         for a draw a dropped beam), drawn when fewer than a revolution's beams are left."""
         self._drawn = NOISE_SCANS
         """Revolutions of the drawn noise used (NOISE_SCANS: none left)."""
+        self._gaps_left = len(self._gaps) - n
+        """The index of ``_gaps`` past which fewer than a revolution's gaps are left."""
         self._due = self.period - 1e-9
         """When the revolution under way ends (a hair early: steps' times are sums)."""
 
@@ -295,7 +297,12 @@ class Lidar(Device):
         start = world.robot.start_pose if world.time > 0.0 else world.robot.pose
         self._track.append(0.0)
         self._track += start
-        self._scan(world, 0.0, skew=False)
+        state = self._state
+        state[0] = world.maze.cell
+        state[1] = self.sees_block(world)
+        state[4] = 0.0  # the scan before the run: the robot stood still
+        self._scan(world, 0.0)
+        state[4] = float(self.settings.motion_skew)
 
     def update(self, world: World) -> None:
         """Record this step's pose (:meth:`_record`'s body: called every step, a call costs
@@ -315,37 +322,27 @@ class Lidar(Device):
         way (the one before it stays)."""
         kept = 0
         while now >= self._due:
-            kept = self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
+            kept = self._scan(world, self.scan_time + self.period)
         if kept:
             del self._track[: 4 * kept]
 
-    def _scan(self, world: World, end: float, *, skew: bool) -> int:
+    def _scan(self, world: World, end: float) -> int:
         """Cast the revolution ending at ``end`` and apply its noise (see the module doc); the
-        poses no longer needed (:func:`~simmer.geometry.scan_revolution`)."""
+        poses no longer needed (:func:`~simmer.geometry.scan_revolution`). Python's part is
+        kept to what changes: the end, the noise drawn when it runs out."""
         state = self._state
-        n = self.settings.beams
         if self._drawn == NOISE_SCANS:
             self._draw()
-        used = self._drawn
-        self._drawn = used + 1
-        jitter, ranged = self._rows
-        if jitter or ranged:
-            first = used * (jitter + ranged) * n
-            state[13] = first if jitter else -1.0
-            state[14] = first + jitter * n if ranged else -1.0
-        if self.settings.dropout and not 0.0 <= state[15] <= len(self._gaps) - n:
+        self._drawn += 1
+        if self.settings.dropout and not 0.0 <= state.item(15) <= self._gaps_left:
             self._gaps[:] = self.rng.geometric(self.settings.dropout, len(self._gaps))
             if state[15] < 0.0:  # the first: the beams before the first drop
                 state[16] = self._gaps[0] - 1.0
                 state[15] = 1.0
             else:
                 state[15] = 0.0
-        maze = world.maze
-        state[0] = maze.cell
-        state[1] = self.sees_block(world)
-        state[2] = end - self.period
         state[3] = end
-        state[4] = skew
+        maze = world.maze
         kept: int = scan_revolution(
             maze.hwall,
             maze.vwall,
@@ -365,9 +362,14 @@ class Lidar(Device):
         return kept
 
     def _draw(self) -> None:
-        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured)."""
-        if any(self._rows):
+        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured: a
+        revolution's jitter's, then its range error's); the kernel moves on a revolution a
+        scan."""
+        jitter, ranged = self._rows
+        if jitter or ranged:
             standard_normals(self.rng, self._normals)
+            self._state[13] = 0.0 if jitter else -1.0
+            self._state[14] = self.settings.beams * jitter if ranged else -1.0
         self._drawn = 0
 
     # -- reading -------------------------------------------------------------------------
