@@ -235,8 +235,9 @@ def ray_grid_inverse(
     cost, and a division costs as much as the rest of a beam's setup."""
     rows = vwall.shape[0]
     cols = hwall.shape[1]
-    cx = int(math.floor(ox / cell))
-    cy = int(math.floor(oy / cell))
+    per_cell = 1.0 / cell  # the same every beam: computed once a scan, out of the loop
+    cx = int(math.floor(ox * per_cell))
+    cy = int(math.floor(oy * per_cell))
     if cx < 0 or cy < 0 or cx >= cols or cy >= rows:
         return -1.0
     if abs(dx) > _EPS and abs(dy) > _EPS:

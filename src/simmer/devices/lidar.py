@@ -310,15 +310,15 @@ class Lidar(Device):
         state[4] = float(self.settings.motion_skew)
 
     def update(self, world: World) -> None:
-        """Record this step's pose (:meth:`_record`'s body: called every step, a call costs
-        about a third of it); cast every scan whose revolution has ended."""
+        """Record this step's pose (:meth:`_record`'s body without its check: called every
+        step, and a call costs about a third of it); cast every scan whose revolution has
+        ended."""
         track = self._track
         if not track:
             self._first(world)
-        now = world.time
-        if now > track[-4]:
-            track.append(now)
-            track += world.robot.pose  # its heading as the robot has it: the kernel unwraps
+        now = world.time  # later than any pose kept: a step's time grows, a read's does not
+        track.append(now)
+        track += world.robot.pose  # its heading as the robot has it: the kernel unwraps
         if now >= self._due:
             self._revolve(world, now)
 
