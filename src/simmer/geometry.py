@@ -519,7 +519,7 @@ def scan_revolution(
     distances: FloatArray,
     points: FloatArray,
 ) -> int:
-    """One LiDAR revolution, whole: beam k of n is measured at ``start + period · k / n``
+    """One LiDAR revolution, whole: beam k of n is measured at ``start + k · (period / n)``
     (``start``: ``end - period``; skew; else all at ``end``), from the robot pose then,
     interpolated along ``track`` (flat: time, x, y, heading in [0, 360), time, ...; the
     headings are unwrapped here, in place, and a beam's heading is the last pose's plus the
@@ -557,13 +557,14 @@ def scan_revolution(
             h += 360.0 * round((last - h) / 360.0)
             track[i] = h
         last = h
+    spacing = period / n  # seconds from one beam to the next
     j = 0
     span = -1  # the step whose 1 / duration ``inverse`` is
     inverse = 0.0
     heading = math.nan
     c = s = 0.0
     for k in range(n):
-        t = start + period * (k / n) if skew else end
+        t = start + k * spacing if skew else end
         while j + 1 < m and track[4 * j + 4] < t:
             j += 1
         if t <= track[0] or m == 1:
