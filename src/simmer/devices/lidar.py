@@ -13,7 +13,8 @@ latest complete scan; before the first revolution ends that is the scan the spin
 made at the start pose before the run began.
 
 Noise, each from the device's own seeded stream in a fixed order (the normals NOISE_SCANS
-revolutions at a time, the dropout as the gaps between dropped beams):
+revolutions at a time, made from the stream's raw bits by the ziggurat method:
+:func:`fill_normals`; the dropout as the gaps between dropped beams):
 ``range_error + range_error_proportional · d`` inches standard deviation on a distance ``d``
 (Stage's ranger model), ``angular_jitter`` degrees standard deviation on each beam's true
 direction (the angle reported stays the nominal one), and ``dropout``, the chance a beam
@@ -310,9 +311,9 @@ class Lidar(Device):
         state[4] = float(self.settings.motion_skew)
 
     def update(self, world: World) -> None:
-        """Record this step's pose (:meth:`_record`'s body without its check: called every
-        step, and a call costs about a third of it); cast every scan whose revolution has
-        ended."""
+        """Record this step's pose; cast every scan whose revolution has ended."""
+        # _record's body without its check, written out: called every step, and a call
+        # costs about a third of it.
         track = self._track
         if not track:
             self._first(world)
