@@ -90,7 +90,22 @@ def fill_normals(bits: NDArray[np.uint64], out: FloatArray, done: int) -> int:
     unit = 1.0 / 2.0**32
     mask = np.uint64(0xFFFFFFFF)
     while done < size and w < words:
-        b = (bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask
+        if w & 1 == 0 and done + 1 < size:  # both words of a draw, the common case at once
+            pair = bits[w >> 1]
+            low, high = pair & mask, pair >> np.uint64(32)
+            la, lb = np.int64(low & np.uint64(0x7F)), np.int64(high & np.uint64(0x7F))
+            ja, jb = np.int64(low >> np.uint64(8)), np.int64(high >> np.uint64(8))
+            if ja < _ZIG_BELOW[la] and jb < _ZIG_BELOW[lb]:
+                out[done] = (1.0 - 2.0 * np.float64((low >> np.uint64(7)) & np.uint64(1))) * (
+                    ja * _ZIG_WIDTH[la]
+                )
+                out[done + 1] = (1.0 - 2.0 * np.float64((high >> np.uint64(7)) & np.uint64(1))) * (
+                    jb * _ZIG_WIDTH[lb]
+                )
+                done += 2
+                w += 2
+                continue
+        b = (bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask  # one word, as it comes
         w += 1
         layer = np.int64(b & np.uint64(0x7F))
         sign = 1.0 - 2.0 * np.float64((b >> np.uint64(7)) & np.uint64(1))
