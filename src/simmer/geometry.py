@@ -497,8 +497,8 @@ def _turned(c: float, s: float, e: float) -> tuple[float, float]:
     the series to e^5 (error below 2e-15), so no sine and cosine a beam; beyond them exactly."""
     if -0.01 < e < 0.01:
         e2 = e * e
-        ce = 1.0 - e2 * (0.5 - e2 / 24.0)
-        se = e * (1.0 - e2 * (1.0 / 6.0 - e2 / 120.0))
+        ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0))
+        se = e * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0)))
     else:
         ce = math.cos(e)
         se = math.sin(e)
