@@ -72,7 +72,7 @@ def scan_runs() -> dict[str, Callable[[], object]]:
         device = sim.robot.devices["l0"]
         assert isinstance(device, Lidar)
         sim.step()
-        runs[name] = lambda d=device, s=sim: d._scan(s, s.time, skew=True)
+        runs[name] = lambda d=device, s=sim: d._scan(s, s.time)
     noisy = rover(True).robot.devices["l0"]
     assert isinstance(noisy, Lidar)
     runs["draws"] = noisy._draw  # NOISE_SCANS revolutions' draws: divided by it in main()

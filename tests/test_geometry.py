@@ -25,6 +25,7 @@ from simmer.geometry import (
     polygon_hits_grid,
     polygons_overlap,
     ray_grid,
+    ray_grid_inverse,
     ray_segments,
     rectangle,
     robot_blocked,
@@ -116,6 +117,20 @@ def test_ray_grid_agrees_with_ray_segments_on_random_mazes(
     walked = ray_grid(maze.hwall, maze.vwall, maze.cell, x, y, *direction, math.inf)
     assert math.isclose(walked, ray_segments(x, y, *direction, maze.segments), abs_tol=1e-9)
     assert ray_grid(maze.hwall, maze.vwall, maze.cell, -1.0, y, *direction, math.inf) == -1.0
+    # The LiDAR's setup of the same walk (reciprocals from one division) finds the same wall.
+    inverse = ray_grid_inverse(maze.hwall, maze.vwall, maze.cell, x, y, *direction, math.inf)
+    assert math.isclose(inverse, walked, abs_tol=1e-9)
+    assert ray_grid_inverse(maze.hwall, maze.vwall, maze.cell, -1.0, y, *direction, 9.0) == -1.0
+
+
+def test_ray_grid_inverse_walks_along_the_axes_and_stops_at_its_limit() -> None:
+    # Rays along an axis (one direction component 0: no reciprocal) and a limit cut short.
+    maze = maze_of([[1, 1, 1], [1, 1, 1]])
+    for angle in (0.0, 90.0, 180.0, 270.0, 45.0, 135.0):
+        direction = heading_vector(angle)
+        for limit in (math.inf, 5.0):
+            args = (maze.hwall, maze.vwall, maze.cell, 13.0, 7.0, *direction, limit)
+            assert math.isclose(ray_grid_inverse(*args), ray_grid(*args), abs_tol=1e-12), angle
 
 
 @settings(deadline=None, max_examples=60)

@@ -27,6 +27,9 @@ BoolArray = NDArray[np.bool_]
 
 _EPS = 1e-12
 _jit = numba.njit(cache=True, nogil=True, fastmath=False)
+_inlined = numba.njit(cache=True, nogil=True, fastmath=False, inline="always")
+"""For a kernel's parts that take arrays: a compiled call passes each array as a handful of
+values, which costs a beam as much as its arithmetic; inlined (Numba's own pass), none."""
 
 
 def polygon_gap(a: FloatArray, b: FloatArray) -> float:
@@ -128,31 +131,26 @@ def _grid_axis(
     return 0, math.inf, math.inf
 
 
-@_jit
-def ray_grid(
+@_inlined
+def _walk_grid(
     hwall: BoolArray,
     vwall: BoolArray,
-    cell: float,
-    ox: float,
-    oy: float,
-    dx: float,
-    dy: float,
+    cx: int,
+    cy: int,
+    step_x: int,
+    step_y: int,
+    t_max_x: float,
+    t_max_y: float,
+    t_delta_x: float,
+    t_delta_y: float,
     limit: float,
 ) -> float:
-    """Distance along a unit ray to the first grid wall, walking cell by cell.
-
-    ``hwall[r, c]``: wall on the horizontal line y = r·cell over column c.
-    ``vwall[r, c]``: wall on the vertical line x = c·cell over row r.
-    Returns inf if nothing is hit within ``limit``, and -1 if the origin is outside the grid.
-    """
+    """The grid walk (Amanatides & Woo) from cell (cx, cy), given each axis's step, distance
+    to its first line and between lines: the distance to the first wall, inf if none is hit
+    within ``limit``. The one walk, set up by :func:`ray_grid` (four divisions, the
+    ultrasonic and ToF rays') and :func:`ray_grid_inverse` (one, the LiDAR's beams)."""
     rows = vwall.shape[0]
     cols = hwall.shape[1]
-    cx = int(math.floor(ox / cell))
-    cy = int(math.floor(oy / cell))
-    if cx < 0 or cy < 0 or cx >= cols or cy >= rows:
-        return -1.0
-    step_x, t_max_x, t_delta_x = _grid_axis(ox, dx, cx, cell)
-    step_y, t_max_y, t_delta_y = _grid_axis(oy, dy, cy, cell)
     while True:
         if t_max_x <= t_max_y:
             if t_max_x > limit:
@@ -174,6 +172,86 @@ def ray_grid(
             if cy < 0 or cy >= rows:
                 return math.inf
             t_max_y += t_delta_y
+
+
+@_jit
+def ray_grid(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    ox: float,
+    oy: float,
+    dx: float,
+    dy: float,
+    limit: float,
+) -> float:
+    """Distance along a unit ray to the first grid wall, walking cell by cell.
+
+    ``hwall[r, c]``: wall on the horizontal line y = r·cell over column c.
+    ``vwall[r, c]``: wall on the vertical line x = c·cell over row r.
+    Returns inf if nothing is hit within ``limit``, and -1 if the origin is outside the grid.
+    The ultrasonic and ToF rays' walk (their released readings are its arithmetic's, to the
+    last bit); :func:`ray_grid_inverse` sets the same walk up for the LiDAR.
+    """
+    rows = vwall.shape[0]
+    cols = hwall.shape[1]
+    cx = int(math.floor(ox / cell))
+    cy = int(math.floor(oy / cell))
+    if cx < 0 or cy < 0 or cx >= cols or cy >= rows:
+        return -1.0
+    step_x, t_max_x, t_delta_x = _grid_axis(ox, dx, cx, cell)
+    step_y, t_max_y, t_delta_y = _grid_axis(oy, dy, cy, cell)
+    return _walk_grid(
+        hwall, vwall, cx, cy, step_x, step_y, t_max_x, t_max_y, t_delta_x, t_delta_y, limit
+    )
+
+
+@_inlined
+def _grid_axis_inverse(
+    origin: float, direction: float, inverse: float, index: int, cell: float
+) -> tuple[int, float, float]:
+    """:func:`_grid_axis` with the direction's reciprocal given: multiplications."""
+    if direction > _EPS:
+        return 1, ((index + 1) * cell - origin) * inverse, cell * inverse
+    if direction < -_EPS:
+        return -1, (index * cell - origin) * inverse, -cell * inverse
+    return 0, math.inf, math.inf
+
+
+@_inlined
+def ray_grid_inverse(
+    hwall: BoolArray,
+    vwall: BoolArray,
+    cell: float,
+    ox: float,
+    oy: float,
+    dx: float,
+    dy: float,
+    limit: float,
+) -> float:
+    """:func:`ray_grid`, its walk set up with one division, not four: 1/dx and 1/dy as dy and
+    dx over dx·dy (within a few units in the last place of the quotients, so distances within
+    1e-12 in of ray_grid's). The LiDAR's walk: its 360 beams a scan are most of a step's
+    cost, and a division costs as much as the rest of a beam's setup."""
+    rows = vwall.shape[0]
+    cols = hwall.shape[1]
+    per_cell = 1.0 / cell  # the same every beam: computed once a scan, out of the loop
+    cx = int(math.floor(ox * per_cell))
+    cy = int(math.floor(oy * per_cell))
+    if cx < 0 or cy < 0 or cx >= cols or cy >= rows:
+        return -1.0
+    if abs(dx) > _EPS and abs(dy) > _EPS:
+        r = 1.0 / (dx * dy)
+        ix = dy * r
+        iy = dx * r
+    else:  # along an axis: the other's step is 0 and its reciprocal unused
+        ix = 1.0 / dx if abs(dx) > _EPS else 0.0
+        iy = 1.0 / dy if abs(dy) > _EPS else 0.0
+    step_x, t_max_x, t_delta_x = _grid_axis_inverse(ox, dx, ix, cx, cell)
+    step_y, t_max_y, t_delta_y = _grid_axis_inverse(oy, dy, iy, cy, cell)
+    return _walk_grid(
+        hwall, vwall, cx, cy, step_x, step_y, t_max_x, t_max_y, t_delta_x, t_delta_y, limit
+    )
 
 
 @_jit
@@ -442,8 +520,8 @@ def robot_blocked(
     return polygons_overlap(scratch, block)
 
 
-@_jit
-def cast_beam(
+@_inlined
+def lidar_beam(
     hwall: BoolArray,
     vwall: BoolArray,
     cell: float,
@@ -452,16 +530,15 @@ def cast_beam(
     see_block: bool,
     ox: float,
     oy: float,
-    angle_deg: float,
+    dx: float,
+    dy: float,
     max_range: float,
 ) -> float:
-    """Distance along one beam at ``angle_deg`` (a heading) to the first wall, or the block if
-    ``see_block``; inf if nothing is hit within ``max_range``. ``fallback`` (the wall segments)
-    is used only when the origin lies outside the grid."""
-    angle = math.radians(angle_deg)
-    dx = -math.sin(angle)
-    dy = math.cos(angle)
-    t = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, max_range)
+    """Distance along one LiDAR beam, the unit vector (dx, dy), to the first wall, or the block
+    if ``see_block``; inf if nothing is hit within ``max_range``. ``fallback`` (the wall
+    segments) is used only when the origin lies outside the grid. A scan's beams and
+    ``Simulation.expected``'s both: the same arithmetic, the same readings."""
+    t = ray_grid_inverse(hwall, vwall, cell, ox, oy, dx, dy, max_range)
     if t < 0.0:
         t = ray_segments(ox, oy, dx, dy, fallback)
     if see_block:
@@ -477,8 +554,8 @@ def _turned(c: float, s: float, e: float) -> tuple[float, float]:
     the series to e^5 (error below 2e-15), so no sine and cosine a beam; beyond them exactly."""
     if -0.01 < e < 0.01:
         e2 = e * e
-        ce = 1.0 - e2 * (0.5 - e2 / 24.0)
-        se = e * (1.0 - e2 * (1.0 / 6.0 - e2 / 120.0))
+        ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0))
+        se = e * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0)))
     else:
         ce = math.cos(e)
         se = math.sin(e)
@@ -493,47 +570,58 @@ def scan_revolution(
     block: FloatArray,
     track: FloatArray,
     state: FloatArray,
-    offsets: FloatArray,
     vectors: FloatArray,
     normals: FloatArray,
     gaps: FloatArray,
-    beam_poses: FloatArray,
-    true: FloatArray,
     distances: FloatArray,
     points: FloatArray,
 ) -> int:
-    """One LiDAR revolution, whole: beam k is measured at ``start + offsets[k]`` (skew; else
-    all at ``end``), from the robot pose then, interpolated along ``track`` (flat: time, x, y,
-    heading unwrapped, time, ...; the heading is ``heading_now`` plus the turn since the last
-    pose, so it is exact while the robot stands still); the beams are cast (:func:`cast_beam`'s
-    body) from the device mounted at (px, py) in the robot frame along ``vectors`` (2, n: each
-    beam's unit vector at heading 0, the mount's rotation included) turned by the pose's
-    heading, then the noise. ``state``: cell, see_block, heading_now, start, end, skew, px, py,
-    min_range, max_range, range_error, range_error_proportional, dropout, angular_jitter
-    (radians), where this revolution's standard normals start in ``normals``, the jitter's and
-    the range error's (-1: that noise is off), and the dropout's place in ``gaps`` (the beams
-    from one dropped beam to the next, geometric draws): the next gap's index (-1: no dropout)
-    and the beams to pass before the next dropped one, both updated. Fills ``beam_poses``,
-    ``true`` (noise-free distance of the jittered beam, inf: no hit), ``distances`` (0: no
-    return) and ``points`` (where each beam met something, NaN where it returned nothing);
-    returns the index of the last pose at or before ``end`` (the
-    poses before it are no longer needed).
+    """One LiDAR revolution, whole: beam k of n is measured at ``start + k · (period / n)``
+    (``start``: ``end - period``; skew; else all at ``end``), from the robot pose then,
+    interpolated along ``track`` (flat: time, x, y, heading in [0, 360), time, ...; the
+    headings are unwrapped here, in place, and a beam's heading is the last pose's plus the
+    turn since then, so it is exact while the robot stands still); the beam is cast
+    (:func:`lidar_beam`) from the device mounted at (px, py) in the robot frame along its
+    ``vectors`` column (2, n: each beam's unit vector at heading 0, the mount's rotation
+    included) turned by the pose's heading, then its noise. ``state``: cell, see_block,
+    period, end, skew, px, py, min_range, max_range, range_error, range_error_proportional,
+    dropout, angular_jitter (radians), where this revolution's standard normals start in
+    ``normals``, the jitter's and the range error's (-1: that noise is off; both moved on to
+    the next revolution's), and the dropout's place in ``gaps`` (the beams from one dropped
+    beam to the next, geometric draws): the next gap's index (-1: no dropout) and the beams
+    to pass before the next dropped one, both updated. Fills ``distances`` (0: no return) and
+    ``points`` (where each beam met something, NaN where it returned nothing); returns the
+    index of the last pose at or before ``end`` (the poses before it are no longer needed).
 
-    Speed (a 360-beam scan is some microseconds): one sine and cosine a pose heading (a robot
-    not turning has one heading all revolution), none a beam (its vector is turned; its
-    jitter by a series), a draw a dropped beam (not a uniform a beam), and one compiled call
-    a scan with few arguments."""
-    cell, see_block, heading_now = state[0], state[1] != 0.0, state[2]
-    start, end, skew = state[3], state[4], state[5] != 0.0
-    px, py, low, high = state[6], state[7], state[8], state[9]
-    const, prop, jitter = state[10], state[11], state[13]
-    jn, rn, gap, left = int(state[14]), int(state[15]), int(state[16]), state[17]
-    n = true.shape[0]
+    Speed (a 360-beam scan is some microseconds, most of it memory the steps between scans
+    have pushed out of the cache): one pass over the beams that writes only the readings; one
+    sine and cosine a pose heading (a robot not turning has one heading all revolution), none
+    a beam (its vector is turned; its jitter by a series); a division a step of the track, not
+    a beam; a draw a dropped beam (not a uniform a beam); one compiled call a scan."""
+    cell, see_block, period = state[0], state[1] != 0.0, state[2]
+    end, skew = state[3], state[4] != 0.0
+    start = end - period
+    px, py, low, high = state[5], state[6], state[7], state[8]
+    const, prop, jitter = state[9], state[10], state[12]
+    jn, rn, gap, left = int(state[13]), int(state[14]), int(state[15]), state[16]
+    n = distances.shape[0]
     m = track.shape[0] // 4
-    last = track[4 * m - 1]
+    heading_now = track[4 * m - 1]
+    last = track[3]
+    for i in range(7, 4 * m, 4):  # unwrapped: each within a half turn of the one before
+        h = track[i]
+        if not -180.0 < last - h < 180.0:
+            h += 360.0 * round((last - h) / 360.0)
+            track[i] = h
+        last = h
+    spacing = period / n  # seconds from one beam to the next
     j = 0
+    span = -1  # the step whose 1 / duration ``inverse`` is
+    inverse = 0.0
+    heading = math.nan
+    c = s = 0.0
     for k in range(n):
-        t = start + offsets[k] if skew else end
+        t = start + k * spacing if skew else end
         while j + 1 < m and track[4 * j + 4] < t:
             j += 1
         if t <= track[0] or m == 1:
@@ -542,42 +630,28 @@ def scan_revolution(
             x, y, turn = track[4 * m - 3], track[4 * m - 2], 0.0
         else:
             i = 4 * j
-            f = (t - track[i]) / (track[i + 4] - track[i])
+            if span != j:
+                span = j
+                inverse = 1.0 / (track[i + 4] - track[i])
+            f = (t - track[i]) * inverse
             x = track[i + 1] + f * (track[i + 5] - track[i + 1])
             y = track[i + 2] + f * (track[i + 6] - track[i + 2])
             a = track[i + 3] - last
             turn = a + f * ((track[i + 7] - last) - a)
-        beam_poses[k, 0] = x
-        beam_poses[k, 1] = y
-        beam_poses[k, 2] = heading_now + turn
-    kept = 0
-    while kept + 1 < m and track[4 * kept + 4] <= end:
-        kept += 1
-    heading = math.nan
-    c = s = 0.0
-    for k in range(n):
-        rh = beam_poses[k, 2]
+        rh = heading_now + turn
         if rh != heading:
             heading = rh
             rad = math.radians(rh)
             c = math.cos(rad)
             s = math.sin(rad)
-        ox = beam_poses[k, 0] + px * c - py * s
-        oy = beam_poses[k, 1] + px * s + py * c
+        ox = x + px * c - py * s
+        oy = y + px * s + py * c
         ex, ey = vectors[0, k], vectors[1, k]
         dx = c * ex - s * ey
         dy = s * ex + c * ey
         if jn >= 0:
             dx, dy = _turned(dx, dy, jitter * normals[jn + k])
-        # cast_beam's body along (dx, dy), written out: a call costs a third of the scan
-        d = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, high)
-        if d < 0.0:
-            d = ray_segments(ox, oy, dx, dy, fallback)
-        if see_block:
-            d = min(d, ray_segments(ox, oy, dx, dy, block))
-        if d > high:
-            d = math.inf
-        true[k] = d
+        d = lidar_beam(hwall, vwall, cell, fallback, block, see_block, ox, oy, dx, dy, high)
         if d != math.inf and rn >= 0:
             d = d + (const + prop * d) * normals[rn + k]
         dropped = False
@@ -597,6 +671,14 @@ def scan_revolution(
             points[k, 0] = ox + dx * d
             points[k, 1] = oy + dy * d
     if gap >= 0:
-        state[16] = gap
-        state[17] = left
+        state[15] = gap
+        state[16] = left
+    rows = (jn >= 0) + (rn >= 0)  # the next revolution's normals
+    if jn >= 0:
+        state[13] = jn + rows * n
+    if rn >= 0:
+        state[14] = rn + rows * n
+    kept = 0
+    while kept + 1 < m and track[4 * kept + 4] <= end:
+        kept += 1
     return kept

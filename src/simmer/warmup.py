@@ -29,7 +29,9 @@ def compile_kernels() -> None:
     poses = np.array([[12.0, 12.0, 0.0], [14.0, 12.0, 90.0]])
     Simulation(default).expected(poses[:1])
     lidar = {"sensors.l0": {"type": "lidar", "position": [0, -1, 7]}}
-    Simulation(with_overrides(default, lidar)).expected(poses[:1], ["l0"])
+    scanning = Simulation(with_overrides(default, lidar))
+    scanning.expected(poses[:1], ["l0"])
+    scanning.step()  # a scan with the A1M8's noise: its normals' kernel
     Batch(None, [0]).command(["w0-1"])
     model = Model(None)
     model.read(model.move(poses, "w0", 1.0), np.random.default_rng(0))

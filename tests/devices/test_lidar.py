@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from simmer import Simulation
 from simmer.cli import app
-from simmer.devices.lidar import Lidar
+from simmer.devices.lidar import ZIGGURAT_R, Lidar, fill_normals, standard_normals
 
 from helpers import default_data, make_sim
 
@@ -154,18 +154,33 @@ def test_a_turning_robots_scan_is_smeared_and_a_still_one_is_not() -> None:
         sim = make_sim(lidar_data(**QUIET, motion_skew=skew))
         device = lidar(sim)
         sim.command("r0-360")  # 120 deg/s: 22 degrees within one revolution
-        next_scan(sim, device)
-        next_scan(sim, device)
-        scans[skew] = (device.distances.copy(), device._beam_poses.copy(), sim)
-    skewed, beam_poses, sim = scans[True]
-    # Each beam of the smeared scan is the still scan at the pose the robot had then.
-    headings = beam_poses[:, 2]
-    assert 20.0 < headings[-1] - headings[0] < 23.0
+        track = [(sim.time, *sim.robot.pose)]  # every step's pose, kept here
+        for _ in range(2):
+            number = device.number
+            while device.number == number:
+                sim.step()
+                track.append((sim.time, *sim.robot.pose))
+        scans[skew] = (device.distances.copy(), np.array(track), device.scan_time, sim)
+    skewed, track, end, sim = scans[True]
+    # Beam k of n is measured at start + (end - start)·k/n, from the pose the robot had then:
+    # interpolated here between the steps around it (the heading unwrapped).
+    period = 1.0 / 5.5
+    times = end - period + period * np.arange(360) / 360
+    headings = np.unwrap(track[:, 3], period=360.0)
+    beam_poses = np.column_stack(
+        [np.interp(times, track[:, 0], column) for column in (track[:, 1], track[:, 2], headings)]
+    )
+    assert 20.0 < beam_poses[-1, 2] - beam_poses[0, 2] < 23.0
     for k in range(0, 360, 7):
         want = sim.expected(beam_poses[k : k + 1], ["l0"])[0, k]
-        assert skewed[k] == pytest.approx(want, abs=1e-9)
-    still, end_poses, _ = scans[False]
-    assert np.ptp(end_poses[:, 2]) == 0.0  # the unskewed scan: one pose for all beams
+        assert skewed[k] == pytest.approx(want, abs=1e-6)
+    # The unskewed scan: every beam from the pose at the scan's end.
+    still, track, end, sim = scans[False]
+    headings = np.unwrap(track[:, 3], period=360.0)
+    at_end = np.array(
+        [[np.interp(end, track[:, 0], c) for c in (track[:, 1], track[:, 2], headings)]]
+    )
+    np.testing.assert_allclose(still, sim.expected(at_end, ["l0"])[0], rtol=0.0, atol=1e-6)
     assert (np.abs(skewed - still) > 0.5).sum() > 20
 
 
@@ -200,6 +215,52 @@ def test_noise_statistics_over_100000_beams_match_the_settings() -> None:
     # Each beam dropped independently (drops drawn as the gaps between them): two neighbours
     # both dropped at the chance squared.
     assert abs(both / pairs - drop**2) < 4 * math.sqrt(drop**2 / pairs)
+
+
+def normal_tail(c: float) -> float:
+    """The chance that a standard normal lies beyond ``c`` on either side."""
+    return math.erfc(c / math.sqrt(2.0))
+
+
+def test_the_noises_normals_have_a_standard_normals_moments_and_tails() -> None:
+    # The LiDAR's normals come from the device's bit stream by the ziggurat method
+    # (standard_normals): 2,000,000 of them, each figure within 5 standard errors.
+    n = 2_000_000
+    z = np.empty(n)
+    standard_normals(np.random.default_rng(11), z)
+    assert abs(z.mean()) < 5 / math.sqrt(n)
+    assert abs(z.var() - 1.0) < 5 * math.sqrt(2 / n)
+    assert abs(np.mean(z**3)) < 5 * math.sqrt(15 / n)  # skewness 0
+    assert abs(np.mean(z**4) - 3.0) < 5 * math.sqrt(96 / n)  # kurtosis 3
+    # The tails, the ziggurat's tail beyond r (its own algorithm) included, on both sides.
+    for c in (1.0, 2.0, 3.0, ZIGGURAT_R, 4.0):
+        expected = n * normal_tail(c)
+        assert abs(np.count_nonzero(np.abs(z) > c) - expected) < 5 * math.sqrt(expected), c
+    assert abs(
+        np.count_nonzero(z > ZIGGURAT_R) - np.count_nonzero(z < -ZIGGURAT_R)
+    ) < 5 * math.sqrt(n * normal_tail(ZIGGURAT_R))
+    # The whole shape: 60 bins of equal chance, a chi-square well within its spread.
+    cuts = np.quantile(np.random.default_rng(0).standard_normal(4_000_000), np.linspace(0, 1, 61))
+    cuts[0], cuts[-1] = -np.inf, np.inf
+    chances = np.diff([0.5 * math.erfc(-c / math.sqrt(2.0)) for c in cuts])
+    counts = np.histogram(z, cuts)[0]
+    chi2 = float((((counts - n * chances) ** 2) / (n * chances)).sum())
+    assert chi2 < 59 + 5 * math.sqrt(2 * 59)
+
+
+def test_the_normals_of_a_seed_are_the_same_however_the_bits_run_out() -> None:
+    # fill_normals stops when its bits run out; standard_normals then draws more: a seed
+    # always gives the same normals, and a short supply fills only part.
+    a, b = np.empty(5000), np.empty(5000)
+    standard_normals(np.random.default_rng(3), a)
+    standard_normals(np.random.default_rng(3), b)
+    np.testing.assert_array_equal(a, b)
+    bits = np.random.default_rng(3).bit_generator.random_raw(100)  # 200 words, a normal each
+    short = np.zeros(5000)
+    filled = fill_normals(bits, short, 0)
+    assert 180 <= filled <= 200
+    assert np.all(short[filled:] == 0.0)
+    assert fill_normals(bits, short, 5000) == 5000
 
 
 def test_angular_jitter_moves_beams_by_its_sd() -> None:

@@ -13,7 +13,8 @@ latest complete scan; before the first revolution ends that is the scan the spin
 made at the start pose before the run began.
 
 Noise, each from the device's own seeded stream in a fixed order (the normals NOISE_SCANS
-revolutions at a time, the dropout as the gaps between dropped beams):
+revolutions at a time, made from the stream's raw bits by the ziggurat method:
+:func:`fill_normals`; the dropout as the gaps between dropped beams):
 ``range_error + range_error_proportional · d`` inches standard deviation on a distance ``d``
 (Stage's ranger model), ``angular_jitter`` degrees standard deviation on each beam's true
 direction (the angle reported stays the nominal one), and ``dropout``, the chance a beam
@@ -32,7 +33,9 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
+import numba
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
 from simmer.devices.base import Circle, Color, Device, DeviceParams, Shape, Whole, World
@@ -45,6 +48,103 @@ MAX_BEAMS = 999
 the scan number, within the protocol's 1,000 commands (``MAX_COMMANDS``)."""
 NOISE_SCANS = 16
 """Revolutions whose noise a LiDAR draws at once (each a NumPy call for all of them)."""
+ZIGGURAT_R = 3.442619855899
+"""Where the 128-layer ziggurat's base strip ends and its tail begins (Marsaglia & Tsang,
+"The ziggurat method for generating random variables", J. Stat. Softw. 5(8), 2000)."""
+ZIGGURAT_V = 9.91256303526217e-3
+"""The area of each of its layers (under exp(-x^2 / 2), the base strip's tail included)."""
+
+
+def _ziggurat_tables() -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """The ziggurat's tables: for layer i (0 the base, 127 the top), the integer below which
+    a 24-bit draw lies wholly under the curve, the layer's width over 2^24, and exp(-x^2/2)
+    at each layer's right edge (129: the top's is 1)."""
+    r, v = ZIGGURAT_R, ZIGGURAT_V
+    edges = [v / math.exp(-0.5 * r * r), r]  # the base's virtual width (v over its height), r
+    for _ in range(126):
+        x = edges[-1]
+        edges.append(math.sqrt(-2.0 * math.log(math.exp(-0.5 * x * x) + v / x)))
+    edges.append(0.0)
+    below = np.array([int(2.0**24 * edges[i + 1] / edges[i]) for i in range(128)], np.int64)
+    width = np.array([edges[i] / 2.0**24 for i in range(128)])
+    height = np.array([math.exp(-0.5 * x * x) for x in edges])
+    return below, width, height
+
+
+_ZIG_BELOW, _ZIG_WIDTH, _ZIG_HEIGHT = _ziggurat_tables()
+
+
+@numba.njit(cache=True, nogil=True)
+def fill_normals(bits: NDArray[np.uint64], out: FloatArray, done: int) -> int:
+    """Fill ``out[done:]`` with standard normals made from ``bits`` (uniform 64-bit draws,
+    each used as two 32-bit words, low half first) by the ziggurat method (Marsaglia & Tsang
+    2000, its 128 layers and 32-bit draws): exact to a step of 2^-24 of a layer's width
+    (2e-7 sd), and about a fifth of NumPy's ``standard_normal``'s time here (half the bits,
+    and its random sign is a branch the processor mispredicts half the time; here a
+    multiply). A word is 7 bits of layer, one of sign, 24 of position; the rare word outside
+    the layer's sure part takes one more for the wedge test, or two a try in the tail
+    (Marsaglia's). Returns how many of ``out`` are filled: all, unless ``bits`` ran out."""
+    words = 2 * bits.shape[0]
+    size = out.shape[0]
+    w = 0
+    unit = 1.0 / 2.0**32
+    mask = np.uint64(0xFFFFFFFF)
+    while done < size and w < words:
+        if w & 1 == 0 and done + 1 < size:  # both words of a draw, the common case at once
+            pair = bits[w >> 1]
+            low, high = pair & mask, pair >> np.uint64(32)
+            la, lb = np.int64(low & np.uint64(0x7F)), np.int64(high & np.uint64(0x7F))
+            ja, jb = np.int64(low >> np.uint64(8)), np.int64(high >> np.uint64(8))
+            if ja < _ZIG_BELOW[la] and jb < _ZIG_BELOW[lb]:
+                out[done] = (1.0 - 2.0 * np.float64((low >> np.uint64(7)) & np.uint64(1))) * (
+                    ja * _ZIG_WIDTH[la]
+                )
+                out[done + 1] = (1.0 - 2.0 * np.float64((high >> np.uint64(7)) & np.uint64(1))) * (
+                    jb * _ZIG_WIDTH[lb]
+                )
+                done += 2
+                w += 2
+                continue
+        b = (bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask  # one word, as it comes
+        w += 1
+        layer = np.int64(b & np.uint64(0x7F))
+        sign = 1.0 - 2.0 * np.float64((b >> np.uint64(7)) & np.uint64(1))
+        j = np.int64(b >> np.uint64(8))  # 24 bits
+        x = j * _ZIG_WIDTH[layer]
+        if j < _ZIG_BELOW[layer]:
+            out[done] = sign * x
+            done += 1
+        elif layer == 0:  # the tail beyond r: uniforms in (0, 1), a word each
+            while w + 2 <= words:
+                u1 = (np.float64((bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask) + 0.5) * unit
+                w += 1
+                u2 = (np.float64((bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask) + 0.5) * unit
+                w += 1
+                tx = -math.log(u1) / ZIGGURAT_R
+                if -2.0 * math.log(u2) > tx * tx:
+                    out[done] = sign * (ZIGGURAT_R + tx)
+                    done += 1
+                    break
+        elif w < words:  # the wedge: a height within the layer, under the curve or not
+            u = (np.float64((bits[w >> 1] >> np.uint64(32 * (w & 1))) & mask) + 0.5) * unit
+            w += 1
+            low = _ZIG_HEIGHT[layer]
+            if low + u * (_ZIG_HEIGHT[layer + 1] - low) < math.exp(-0.5 * x * x):
+                out[done] = sign * x
+                done += 1
+    return done
+
+
+def standard_normals(rng: np.random.Generator, out: FloatArray) -> None:
+    """Fill ``out`` with standard normals from ``rng``'s bit stream (:func:`fill_normals`):
+    the draws of a seed are always the same, though not NumPy's ``standard_normal``'s."""
+    done = 0
+    while done < len(out):
+        wanted = len(out) - done
+        draws = (wanted + wanted // 16) // 2 + 8  # two words a draw, and a few rejected
+        done = fill_normals(rng.bit_generator.random_raw(draws), out, done)
+
+
 BEAMS_READ = -1.0
 """``l0--1``: the beams per revolution."""
 SCAN_NUMBER_READ = -2.0
@@ -142,21 +242,16 @@ class Lidar(Device):
         """Each beam's unit vector (2, beams: x row, y row) at robot heading 0, the mount's
         rotation included: a scan turns them by the robot's heading."""
         self._track: list[float] = []
-        """The revolution under way's steps, flat (time, x, y, heading unwrapped, time, ...):
-        a list appended to each step and made an array once a scan, the cheapest way per
-        step."""
-        self._beam_poses = np.empty((n, 3))
-        self._true = np.empty(n)
-        self._offsets = self.period * (np.arange(n) / n)
-        """When each beam is measured after its revolution starts, seconds."""
+        """The revolution under way's steps, flat (time, x, y, heading, time, ...; the heading
+        as the robot has it, in [0, 360): the kernel unwraps it): a list appended to each step
+        and made an array once a scan, the cheapest way per step."""
         self._state = np.array(
             [
-                0.0,  # the maze's cell, the block seen, the heading now, start, end, skew:
-                0.0,  # set each scan
+                0.0,  # the maze's cell, the block seen: set at the first scan
                 0.0,
-                0.0,
-                0.0,
-                0.0,
+                self.period,
+                0.0,  # the revolution's end: set each scan
+                float(params.motion_skew),
                 self.position.x,
                 self.position.y,
                 params.min_range,
@@ -165,14 +260,14 @@ class Lidar(Device):
                 params.range_error_proportional,
                 params.dropout,
                 math.radians(params.angular_jitter),
-                -1.0,  # where this revolution's normals start (-1: that noise is off)
-                -1.0,
+                -1.0,  # where this revolution's normals start (-1: that noise is off): set
+                -1.0,  # at each draw, moved on a revolution by the kernel
                 -1.0,  # the next gap between dropped beams; the beams before the next drop
                 0.0,
             ]
         )
         """:func:`~simmer.geometry.scan_revolution`'s numbers, in one array (each argument of
-        a compiled call costs)."""
+        a compiled call costs), each written only when it changes (a write costs too)."""
         ranged = bool(params.range_error or params.range_error_proportional)
         self._rows = (bool(params.angular_jitter), ranged)
         """Which rows of standard normals a revolution draws: its beams' jitter, their range
@@ -187,10 +282,10 @@ class Lidar(Device):
         for a draw a dropped beam), drawn when fewer than a revolution's beams are left."""
         self._drawn = NOISE_SCANS
         """Revolutions of the drawn noise used (NOISE_SCANS: none left)."""
+        self._gaps_left = len(self._gaps) - n
+        """The index of ``_gaps`` past which fewer than a revolution's gaps are left."""
         self._due = self.period - 1e-9
         """When the revolution under way ends (a hair early: steps' times are sums)."""
-        self._heading = 0.0
-        """The heading of the latest pose recorded, as the robot has it (in [0, 360))."""
 
     def height(self, world: World) -> float:
         """The scan plane's height: ``height``, else the third position value, else the
@@ -206,71 +301,69 @@ class Lidar(Device):
     # -- stepping ------------------------------------------------------------------------
 
     def _record(self, world: World) -> float:
-        """Keep the robot's pose now (its heading unwrapped from the last one's), and the
-        first scan (at the start pose) if none is made yet; the time now. Called every step:
-        kept lean (a step without a scan costs the LiDAR a few tenths of a microsecond)."""
-        now = world.time
+        """Keep the robot's pose now, and the first scan (at the start pose) if none is made
+        yet; the time now (:meth:`update` does the same, written out)."""
         track = self._track
         if not track:
             self._first(world)
-        if now <= track[-4]:
-            return now
-        x, y, heading = world.robot.pose
-        last = track[-1]
-        if -180.0 < last - heading < 180.0:  # within a half turn of the last: as it is
-            track += (now, x, y, heading)
-        else:
-            track += (now, x, y, heading + 360.0 * round((last - heading) / 360.0))
-        self._heading = heading
+        now = world.time
+        if now > track[-4]:
+            track.append(now)
+            track += world.robot.pose
         return now
 
     def _first(self, world: World) -> None:
         """The first pose recorded and the scan the spinning LiDAR made there before the run
         began (the start pose's, if the run has begun)."""
         start = world.robot.start_pose if world.time > 0.0 else world.robot.pose
-        self._track += (0.0, start.x, start.y, start.heading)
-        self._heading = start.heading
-        self._scan(world, 0.0, skew=False)
+        self._track.append(0.0)
+        self._track += start
+        state = self._state
+        state[0] = world.maze.cell
+        state[1] = self.sees_block(world)
+        state[4] = 0.0  # the scan before the run: the robot stood still
+        self._scan(world, 0.0)
+        state[4] = float(self.settings.motion_skew)
 
     def update(self, world: World) -> None:
         """Record this step's pose; cast every scan whose revolution has ended."""
-        now = self._record(world)
-        if now < self._due:
-            return
+        # _record's body without its check, written out: called every step, and a call
+        # costs about a third of it.
+        track = self._track
+        if not track:
+            self._first(world)
+        now = world.time  # later than any pose kept: a step's time grows, a read's does not
+        track.append(now)
+        track += world.robot.pose  # its heading as the robot has it: the kernel unwraps
+        if now >= self._due:
+            self._revolve(world, now)
+
+    def _revolve(self, world: World, now: float) -> None:
+        """Cast every revolution ended by ``now``; drop the poses before the revolution under
+        way (the one before it stays)."""
         kept = 0
         while now >= self._due:
-            kept = self._scan(world, self.scan_time + self.period, skew=self.settings.motion_skew)
-        if kept:  # drop the poses before the revolution under way (the one before it stays)
+            kept = self._scan(world, self.scan_time + self.period)
+        if kept:
             del self._track[: 4 * kept]
 
-    def _scan(self, world: World, end: float, *, skew: bool) -> int:
+    def _scan(self, world: World, end: float) -> int:
         """Cast the revolution ending at ``end`` and apply its noise (see the module doc); the
-        poses no longer needed (:func:`~simmer.geometry.scan_revolution`)."""
+        poses no longer needed (:func:`~simmer.geometry.scan_revolution`). Python's part is
+        kept to what changes: the end, the noise drawn when it runs out."""
         state = self._state
-        n = self.settings.beams
         if self._drawn == NOISE_SCANS:
             self._draw()
-        used = self._drawn
-        self._drawn = used + 1
-        jitter, ranged = self._rows
-        if jitter or ranged:
-            first = used * (jitter + ranged) * n
-            state[14] = first if jitter else -1.0
-            state[15] = first + jitter * n if ranged else -1.0
-        if self.settings.dropout and not 0.0 <= state[16] <= len(self._gaps) - n:
+        self._drawn += 1
+        if self.settings.dropout and not 0.0 <= state.item(15) <= self._gaps_left:
             self._gaps[:] = self.rng.geometric(self.settings.dropout, len(self._gaps))
-            if state[16] < 0.0:  # the first: the beams before the first drop
-                state[17] = self._gaps[0] - 1.0
-                state[16] = 1.0
+            if state[15] < 0.0:  # the first: the beams before the first drop
+                state[16] = self._gaps[0] - 1.0
+                state[15] = 1.0
             else:
-                state[16] = 0.0
+                state[15] = 0.0
+        state[3] = end
         maze = world.maze
-        state[0] = maze.cell
-        state[1] = self.sees_block(world)
-        state[2] = self._heading
-        state[3] = end - self.period
-        state[4] = end
-        state[5] = skew
         kept: int = scan_revolution(
             maze.hwall,
             maze.vwall,
@@ -278,12 +371,9 @@ class Lidar(Device):
             world.block.segments,
             np.array(self._track, dtype=np.float64),  # the dtype given: twice as fast
             state,
-            self._offsets,
             self.vectors,
             self._normals,
             self._gaps,
-            self._beam_poses,
-            self._true,
             self.distances,
             self.points,
         )
@@ -293,9 +383,14 @@ class Lidar(Device):
         return kept
 
     def _draw(self) -> None:
-        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured)."""
-        if any(self._rows):
-            self.rng.standard_normal(out=self._normals)
+        """Draw the next NOISE_SCANS revolutions' normals (only the rows configured: a
+        revolution's jitter's, then its range error's); the kernel moves on a revolution a
+        scan."""
+        jitter, ranged = self._rows
+        if jitter or ranged:
+            standard_normals(self.rng, self._normals)
+            self._state[13] = 0.0 if jitter else -1.0
+            self._state[14] = self.settings.beams * jitter if ranged else -1.0
         self._drawn = 0
 
     # -- reading -------------------------------------------------------------------------

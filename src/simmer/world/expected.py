@@ -24,8 +24,7 @@ from simmer.geometry import (
     BoolArray,
     FloatArray,
     cast_fan,
-    ray_grid,
-    ray_segments,
+    lidar_beam,
     white_fraction,
     wrap_degrees,
 )
@@ -138,11 +137,7 @@ def _scans(
             ex, ey = vectors[0, k], vectors[1, k]
             dx = c * ex - s * ey
             dy = s * ex + c * ey
-            d = ray_grid(hwall, vwall, cell, ox, oy, dx, dy, high)
-            if d < 0.0:
-                d = ray_segments(ox, oy, dx, dy, fallback)
-            if see_block:
-                d = min(d, ray_segments(ox, oy, dx, dy, block))
+            d = lidar_beam(hwall, vwall, cell, fallback, block, see_block, ox, oy, dx, dy, high)
             out[i, k] = 0.0 if (d == math.inf or d < low or d > high) else d
 
 
