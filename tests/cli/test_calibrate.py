@@ -99,6 +99,7 @@ def test_a_folder_that_is_not_a_taps_is_one_line(tmp_path: Path, command: str) -
     assert "not a tap's run folder" in lines[0]
 
 
+@pytest.mark.slow  # draws compare.png twice: about 2 CPU s, the quick loop's bound
 def test_compare_says_which_fitted_settings_it_draws(tmp_path: Path) -> None:
     team = team_config(load_config())
     record_short_run(Simulation(team, seed=2), team, tmp_path / "run")
