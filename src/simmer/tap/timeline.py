@@ -22,6 +22,9 @@ TIMELINE_IMAGE = "timeline.png"
 """The picture ``simmer plot`` writes into a tap's run folder."""
 LABELLED = 60
 """Moves labelled with their amount (the first ones); the rest are drawn unlabelled."""
+LABEL_GAP = 0.04
+"""A move's label goes above the previous one's when the two are closer than this share of
+the time axis (about 45 pixels: a label's width), so neighbours' labels do not run together."""
 
 
 @dataclass(frozen=True)
@@ -76,18 +79,23 @@ def draw_tap_timeline(run: TapRun, target: Path) -> None:
         axes = fig.subplots(panels, 1, sharex=True, squeeze=False, height_ratios=ratios)[:, 0]
         ax = axes[0]
         labelled = 0
+        last = run.exchanges[-1].time if run.exchanges else 0.0
+        near = max(last, 1.0) * LABEL_GAP
         for row, drive in enumerate(rows):
             moves = [(t, v, r) for t, v, r in drives[drive] if v != 0.0]
             polls = [t for t, v, _ in drives[drive] if v == 0.0]
             if polls:
                 ax.plot(polls, [row] * len(polls), "|", color="#bbbbbb", ms=6, label=None)
+            previous, raised = -math.inf, False
             for t, value, reply in moves:
                 refused = not math.isinf(reply)
                 ax.plot([t], [row], "v" if value < 0 else "^", ms=7,
                         color="#d62728" if refused else "#3182bd")  # fmt: skip
                 if labelled < LABELLED:
-                    ax.annotate(f"{value:+g}", (t, row), xytext=(0, 7), textcoords="offset points",
-                                ha="center", fontsize=7)  # fmt: skip
+                    raised = t - previous < near and not raised  # a close one goes above it
+                    ax.annotate(f"{value:+g}", (t, row), xytext=(0, 16 if raised else 7),
+                                textcoords="offset points", ha="center", fontsize=7)  # fmt: skip
+                    previous = t
                     labelled += 1
         if unanswered:
             ax.plot(unanswered, [len(rows)] * len(unanswered), "x", color="#d62728", ms=6)
@@ -107,7 +115,6 @@ def draw_tap_timeline(run: TapRun, target: Path) -> None:
             ax.set_title(f"{sensor}: {len(values)} readings received", loc="left", fontsize=9)
             ax.grid(alpha=0.3)
         axes[-1].set_xlabel("time since the tap started (wall-clock seconds)")
-        last = run.exchanges[-1].time if run.exchanges else 0.0
         fig.suptitle(
             f"{run.folder.name}: the real robot's traffic through simmer tap (no true pose)\n"
             f"{len(run.exchanges)} exchanges over {last:.1f} s; {len(unanswered)} other commands "
