@@ -165,8 +165,11 @@ class Ultrasonic(Device):
         """The robot's sensors cast with this one (made at the first read)."""
         self._slot = 0
         """This sensor's row in them."""
-        self._seen: FloatArray = np.concatenate((np.zeros(4), np.full(params.num_rays, math.inf)))
-        """This sensor's row of the cast of its last read (:attr:`_Fans.latest`): drawn."""
+        before = np.concatenate((np.zeros(4), np.full(params.num_rays, math.inf)))
+        self._seen: FloatArray = before.reshape(1, -1)
+        """The cast of its last read (:attr:`_Fans.latest`, whose row :attr:`_seen_slot` is
+        this sensor's: kept as they are, nothing built a read): drawn."""
+        self._seen_slot = 0
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
@@ -211,24 +214,25 @@ class Ultrasonic(Device):
                 distance += self.gauss() * error * distance
             reading = min(max(distance, s.min_range), s.max_range)
         self.last_time = world.time
-        self._seen = fans.latest[self._slot]
+        self._seen, self._seen_slot = fans.latest, self._slot
         self.reading = reading
         return reading
 
     @property
     def rays(self) -> FloatArray:
         """Each ray's distance at the last read (inf: nothing within range)."""
-        return self._seen[4 : 4 + self.settings.num_rays]
+        return self._seen[self._seen_slot, 4 : 4 + self.settings.num_rays]
 
     @property
     def last_heading(self) -> float:
         """Which way the sensor faced at its last read, degrees."""
-        return float(self._seen[2])
+        return float(self._seen[self._seen_slot, 2])
 
     @property
     def last_origin(self) -> Vec2:
         """Where the sensor was at its last read (built when the window asks)."""
-        return Vec2(float(self._seen[0]), float(self._seen[1]))
+        row = self._seen[self._seen_slot]
+        return Vec2(float(row[0]), float(row[1]))
 
     def shapes(self, world: World) -> list[Shape]:
         """The rays of the last read, while it is recent enough to show."""
