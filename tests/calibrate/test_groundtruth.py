@@ -23,12 +23,14 @@ def test_one_hidden_robot_behind_the_tap_is_recovered(
     # the robot's busy polls, for this test only: the level is restored after it (set on the
     # logger for good, it silenced the warnings later tests on the same worker look for)
     caplog.set_level(logging.ERROR, logger="simmer")
-    # the robot drives four times as fast as the default and holds still for 1.5 s, not 3:
-    # the routine's 43 s of driving and holding become 16 s (its noise is per command, so
+    # the robot drives twice as fast as the default and holds still for 1.5 s, not 3: the
+    # routine's 43 s of driving and holding become about 24 s (its noise is per command, so
     # what is fitted is the same; the gyroscope's drift is told less tightly from the
-    # shorter holds, which its interval says)
+    # shorter holds, which its interval says). Four times as fast, 17 s, left too few
+    # readings in the band for the 95% in 2 runs of 12 (94.8%; 95.1-97.6% otherwise): the
+    # tap's timing counts for more the faster the robot moves. Twice as fast: 96.4-97.4%.
     fast = with_overrides(
-        load_config(), {"drives.w0.velocity": [0.0, 24.0], "drives.r0.ang_velocity": 480.0}
+        load_config(), {"drives.w0.velocity": [0.0, 12.0], "drives.r0.ang_velocity": 240.0}
     )
     result = trial(11, tmp_path / "trial", fast, seeds=100, hold=1.5)  # fewer: a thin band
     missed = [key for key, covered in result.covered.items() if not covered]
