@@ -108,6 +108,24 @@ def test_the_ranging_error_has_the_configured_spread(
     assert again.command("t0,t0,t0") == readings[:3].tolist()  # the same seed, the same noise
 
 
+def test_the_ranging_error_is_the_streams_normal_of_that_spread_draw_for_draw() -> None:
+    # drawn from a block of N(0, 2) values times sd / 2: rng.normal(0, sd) to the bit, in order
+    sim = tof_sim(seed=9, fov=1.0)
+    t0 = sim.robot.devices["t0"]
+    stream = sim.stream("device:t0")
+    drawn = 0
+    for x in np.linspace(20.0, 60.0, 150):
+        sim.robot.pose = Pose(float(x), 42.0, 180.0)
+        distance = t0.distance(sim)
+        if distance >= t0.max_range:  # no return: no draw
+            assert sim.command("t0") == [t0.out_of_range]
+            continue
+        sd = t0.error_constant + t0.error * distance
+        assert sim.command("t0") == [max(distance + float(stream.normal(0.0, sd)), 0.0)]
+        drawn += 1
+    assert drawn > 50
+
+
 def test_millimetres_are_whole_as_the_drivers_give_them() -> None:
     sim = tof_sim(units="mm", mode="long_range", **NARROW)
     sim.robot.pose = Pose(10.3, 42.0, 180.0)

@@ -149,6 +149,7 @@ class TimeOfFlight(Device):
     """Nearest return in a narrow cone; the driver's out-of-range value beyond reach."""
 
     Params = TimeOfFlightParams
+    block_noise: ClassVar[bool] = True
     default_outline: ClassVar[FloatArray] = rectangle(1.0, 0.5)
 
     def __init__(self, device_id: str, params: DeviceParams, rng: np.random.Generator) -> None:
@@ -205,8 +206,8 @@ class TimeOfFlight(Device):
         if distance >= self.max_range:  # inf: no return within reach
             return self.out_of_range
         sd = self.error_constant + self.error * distance
-        if sd > 0.0:
-            distance = max(distance + float(self.rng.normal(0.0, sd)), 0.0)
+        if sd > 0.0:  # rng.normal(0, sd) to the bit: an N(0, 2) draw of the block times sd / 2
+            distance = max(distance + self.gauss() * (sd / 2.0), 0.0)
         return in_units(distance, self.settings.units)
 
     def shapes(self, world: World) -> list[Shape]:
