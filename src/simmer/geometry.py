@@ -308,9 +308,11 @@ def cast_fans(
     side: float,
     mounts: FloatArray,
     out: FloatArray,
+    only: int,
 ) -> None:
     """Cast the fans of several ultrasonic sensors on a robot at (``rx``, ``ry``, ``rheading``)
-    in one call: a Python call per fan costs more than its rays.
+    in one call: a Python call per fan costs more than its rays. ``only``: that sensor's fan
+    alone (-1: every one).
 
     ``bx``, ``by``, ``side``: the block's centre and side. ``mounts`` (K, 7), a sensor a
     row: its x, y and rotation on the robot, its height (NaN: the block's side), beamwidth,
@@ -323,6 +325,8 @@ def cast_fans(
     c = math.cos(rad)
     s = math.sin(rad)
     for k in range(mounts.shape[0]):
+        if only >= 0 and k != only:
+            continue
         px, py, rotation, height = mounts[k, 0], mounts[k, 1], mounts[k, 2], mounts[k, 3]
         beamwidth, max_range, n = mounts[k, 4], mounts[k, 5], int(mounts[k, 6])
         x = rx + px * c - py * s

@@ -76,6 +76,25 @@ def test_each_sensor_reads_what_its_fan_cast_alone_reads_at_random_poses() -> No
     assert checked == 1600
 
 
+def test_sensors_read_one_at_a_time_in_any_order_read_as_cast_alone() -> None:
+    # a pose casts every fan when several were read at the pose before, else each fan when it
+    # is first read: both ways, in any order, the readings are a fan's cast alone
+    sim = mixed_heights()
+    rng = np.random.default_rng(37)
+    checked = 0
+    for _ in range(300):
+        sim.robot.pose = Pose(
+            float(rng.uniform(1, 95)), float(rng.uniform(1, 47)), float(rng.uniform(0, 360))
+        )
+        chosen = rng.permutation(IDS)[: rng.integers(1, 5)]
+        for sensor_id in chosen:
+            sensor = sim.robot.devices[sensor_id]
+            assert isinstance(sensor, Ultrasonic)
+            assert sim.command(str(sensor_id)) == [alone(sim, sensor)[0]]
+            checked += 1
+    assert checked > 600
+
+
 def test_moving_the_block_alone_is_seen_at_once() -> None:
     sim = make_sim()
     assert sim.place_robot(66.0, 18.0, 180.0)

@@ -86,8 +86,11 @@ class UltrasonicParams(MeasuredParams):
 class _Fans:
     """A robot's ultrasonic sensors cast together, once a pose: a message reads several
     (``u0,u1,u2,u3``), and one compiled call for all of them costs less than one call each
-    (:func:`~simmer.geometry.cast_fans`). A sensor of a subclass of :class:`Ultrasonic` is
-    cast on its own, from its attributes as they are at each cast (it may turn itself).
+    (:func:`~simmer.geometry.cast_fans`). A program that reads one sensor a pose would pay
+    for every fan, so a pose casts every fan only when more than one was read at the pose
+    before; otherwise each fan when it is first read. A sensor of a subclass of
+    :class:`Ultrasonic` is cast on its own, from its attributes as they are at each cast (it
+    may turn itself).
 
     A cast holds while the robot's pose, the block's outline and the maze are the very objects
     it was made for: the robot moves by a new pose, and the block by a new outline
@@ -100,9 +103,12 @@ class _Fans:
         self.columns = 4 + int(self.mounts[:, 6].max())
         self.latest: FloatArray = np.zeros((len(sensors), self.columns))
         """The latest cast, a row a sensor: its x, y and heading in the world, its fan's
-        shortest distance, then each ray's (inf: nothing within range). A new array a cast:
+        shortest distance, then each ray's (inf: nothing within range). A new array a pose:
         each sensor's last read keeps the rays it measured, for the window."""
-        self.distances: list[float] = []
+        self.distances = [math.inf] * len(sensors)
+        self.cast = [False] * len(sensors)
+        """Whether each sensor's fan is cast at this pose (its row of :attr:`latest` and its
+        distance hold)."""
         self.pose: Pose | None = None
         self.block: FloatArray | None = None
         self.maze: MazeView | None = None
@@ -117,13 +123,27 @@ class _Fans:
             rows.append((x, y, sensor.rotation, height, s.beamwidth, s.max_range, s.num_rays))
         return np.array(rows, dtype=np.float64)
 
-    def cast(self, robot_pose: Pose, block: BlockView, maze: MazeView) -> None:
-        """Cast every fan from ``robot_pose``."""
+    def distance(self, slot: int, robot_pose: Pose, block: BlockView, maze: MazeView) -> float:
+        """Sensor ``slot``'s noise-free distance (inf: nothing within its range), cast first
+        if it is not at this pose yet."""
+        if robot_pose is not self.pose or block.segments is not self.block or maze is not self.maze:
+            every = self.cast.count(True) > 1  # as many read at the pose before
+            self.latest = np.empty((len(self.mounts), self.columns))
+            self.cast = [every] * len(self.mounts)
+            self._fill(robot_pose, block, maze, -1 if every else slot)
+            # a sensor whose mount may change is cast again at each read
+            self.pose = None if self.sensors else robot_pose
+            self.block, self.maze = block.segments, maze
+        elif not self.cast[slot]:
+            self._fill(robot_pose, block, maze, slot)
+        return self.distances[slot]
+
+    def _fill(self, robot_pose: Pose, block: BlockView, maze: MazeView, only: int) -> None:
+        """Cast sensor ``only``'s fan (-1: every one) into :attr:`latest`."""
         if self.sensors:
             self.mounts = self._mounts(self.sensors)
-        mounts = self.mounts
-        cast = np.empty((len(mounts), self.columns))
         rx, ry, rheading = robot_pose
+        cast = self.latest
         cast_fans(
             maze.hwall,
             maze.vwall,
@@ -136,14 +156,15 @@ class _Fans:
             block.x,
             block.y,
             block.size,
-            mounts,
+            self.mounts,
             cast,
+            only,
         )
-        self.latest = cast
-        self.distances = cast[:, 3].tolist()
-        # a sensor whose mount may change is cast again at each read
-        self.pose = None if self.sensors else robot_pose
-        self.block, self.maze = block.segments, maze
+        if only < 0:
+            self.distances = cast[:, 3].tolist()
+        else:
+            self.distances[only] = float(cast[only, 3])
+            self.cast[only] = True
 
 
 class Ultrasonic(Device):
@@ -201,10 +222,7 @@ class Ultrasonic(Device):
     def simulate(self, value: float, world: World) -> float:
         """Measure the distance in inches, with noise, clamped to [min_range, max_range]."""
         fans = self._fans or self._join(world)
-        robot_pose, block, maze = world.robot.pose, world.block, world.maze
-        if robot_pose is not fans.pose or block.segments is not fans.block or maze is not fans.maze:
-            fans.cast(robot_pose, block, maze)
-        distance = fans.distances[self._slot]
+        distance = fans.distance(self._slot, world.robot.pose, world.block, world.maze)
         s = self.settings
         if distance == math.inf:
             reading = s.max_range

@@ -161,8 +161,10 @@ class TimeOfFlight(Device):
         )
         self.rays = np.full(params.num_rays, math.inf)
         self.last_time = -math.inf
-        self.last_origin = Vec2(0.0, 0.0)
+        self._last_x = self._last_y = 0.0
         self.last_heading = 0.0
+        # the mounting height if set (None: the block's side, read at each read)
+        self._height = params.height if params.height is not None else self.mount_height
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
@@ -178,16 +180,26 @@ class TimeOfFlight(Device):
         return math.degrees(math.atan2(h, d)) <= self.fov / 2.0
 
     def distance(self, world: World) -> float:
-        """The nearest return in inches, noise-free; inf if nothing is within ``max_range``."""
-        x, y, heading = self.world_pose(world.robot.pose)
-        maze = world.maze
+        """The nearest return in inches, noise-free; inf if nothing is within ``max_range``.
+        :meth:`world_pose` and :meth:`sees_block` written out (the same arithmetic in the same
+        order): a read's Python costs more than its three rays."""
+        rx, ry, rheading = world.robot.pose
+        px, py = self.position
+        rad = math.radians(rheading)
+        c, sn = math.cos(rad), math.sin(rad)
+        x = rx + px * c - py * sn
+        y = ry + px * sn + py * c
+        heading = rheading + self.rotation
+        maze, block = world.maze, world.block
+        h = (block.size if self._height is None else self._height) - block.size
+        d = math.hypot(block.x - x, block.y - y)
         nearest = cast_fan(
             maze.hwall,
             maze.vwall,
             maze.cell,
             maze.segments,
-            world.block.segments,
-            self.sees_block(world, x, y),
+            block.segments,
+            math.degrees(math.atan2(h, d)) <= self.fov / 2.0,
             x,
             y,
             heading,
@@ -195,9 +207,14 @@ class TimeOfFlight(Device):
             self.max_range,
             self.rays,
         )
-        self.last_origin = Vec2(x, y)
+        self._last_x, self._last_y = x, y
         self.last_heading = heading
         return nearest
+
+    @property
+    def last_origin(self) -> Vec2:
+        """Where the sensor was at its last read (built when the window asks)."""
+        return Vec2(self._last_x, self._last_y)
 
     def simulate(self, value: float, world: World) -> float:
         """The distance with noise, in ``units``; ``out_of_range`` if nothing is in reach."""
@@ -216,14 +233,13 @@ class TimeOfFlight(Device):
         if not s.visible_measurement or world.time - self.last_time > s.visible_measurement_time:
             return []
         n = s.num_rays
+        origin = self.last_origin
         out: list[Shape] = []
         for k in range(n):
             length = min(float(self.rays[k]), self.max_range)
             direction = heading_vector(self.last_heading + ((k - (n - 1) / 2.0) / n) * self.fov)
-            end = Vec2(
-                self.last_origin.x + direction.x * length, self.last_origin.y + direction.y * length
-            )
-            out.append(Segment(self.last_origin, end, s.beam_color))
+            end = Vec2(origin.x + direction.x * length, origin.y + direction.y * length)
+            out.append(Segment(origin, end, s.beam_color))
         return out
 
 
