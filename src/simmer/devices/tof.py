@@ -180,9 +180,9 @@ class TimeOfFlight(Device):
         return math.degrees(math.atan2(h, d)) <= self.fov / 2.0
 
     def distance(self, world: World) -> float:
-        """The nearest return in inches, noise-free; inf if nothing is within ``max_range``.
-        :meth:`world_pose` and :meth:`sees_block` written out (the same arithmetic in the same
-        order): a read's Python costs more than its three rays."""
+        """The nearest return in inches, noise-free; inf if nothing is within ``max_range``."""
+        # world_pose and sees_block written out, the same arithmetic in the same order: a
+        # read's Python costs more than its three rays
         rx, ry, rheading = world.robot.pose
         px, py = self.position
         rad = math.radians(rheading)
