@@ -194,9 +194,7 @@ class Ultrasonic(Device):
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
-        if self.settings.height is not None:
-            return self.settings.height
-        return self.mount_height if self.mount_height is not None else world.block.size
+        return world.block.size if self._height is None else self._height
 
     def sees_block(self, world: World, x: float, y: float) -> bool:
         """Block visibility: ``atan(h / d) <= beamwidth / 2`` (BEHAVIOUR §5.3)."""

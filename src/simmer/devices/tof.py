@@ -168,9 +168,7 @@ class TimeOfFlight(Device):
 
     def height(self, world: World) -> float:
         """Mounting height: ``height``, else the third position value, else the block size."""
-        if self.settings.height is not None:
-            return self.settings.height
-        return self.mount_height if self.mount_height is not None else world.block.size
+        return world.block.size if self._height is None else self._height
 
     def sees_block(self, world: World, x: float, y: float) -> bool:
         """The ultrasonic kind's rule with the field of view: ``atan(h / d) <= fov / 2``."""
