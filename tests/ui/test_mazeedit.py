@@ -4,6 +4,10 @@ and refuses an invalid one saying why."""
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pygame
@@ -11,6 +15,8 @@ import pytest
 
 from simmer.config.mazes import course_maze, read_maze, write_maze
 from simmer.ui.mazeedit import MazeEditor, window_size
+
+from helpers import let_time_pass
 
 
 @pytest.fixture
@@ -99,3 +105,25 @@ def test_the_ambiguity_map_is_drawn_and_a_toggles_it(editor: MazeEditor) -> None
 
 def test_escape_closes_the_editor(editor: MazeEditor) -> None:
     assert not press(editor, pygame.K_ESCAPE)
+
+
+@pytest.mark.slow  # starts simmer three times
+@pytest.mark.usefixtures("ctrl_c")
+@pytest.mark.parametrize("after", [0.0, 0.05, 0.3])
+def test_ctrl_c_in_the_terminal_ends_the_editor_as_closing_it(tmp_path: Path, after: float) -> None:
+    """Ctrl-C at once after the editor says it is editing (pygame still starting), or later in
+    its loop: it ends, saying the maze was not saved, with no traceback."""
+    env = os.environ | {"SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "simmer", "maze", "edit", "practice.txt"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    assert process.stdout is not None
+    first = process.stdout.readline()
+    assert first.startswith("editing practice.txt"), first
+    let_time_pass(after)  # the moment Ctrl-C lands, not a wait for something to happen
+    process.send_signal(signal.SIGINT)
+    rest, _ = process.communicate(timeout=60)
+    assert process.returncode == 0, rest
+    assert rest.strip().splitlines()[-1] == "practice.txt not saved", rest
+    assert "Traceback" not in rest

@@ -3,6 +3,7 @@ and conversions between TOML and text pictures (docs/mazes.md)."""
 
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -178,14 +179,22 @@ def edit(
     maze = course_maze("mie444") if new else _load(str(file))
     from simmer.ui.mazeedit import edit_maze
 
-    out.print(
-        f"editing {file}{' (a new file: mie444 to start from)' if new else ''} in a window: "
-        "S saves; Esc, closing the window or Ctrl-C here ends",
-        markup=False,
-    )
-    before = None if new else file.stat().st_mtime_ns
+    # Ctrl-C in the terminal ends it as closing the window does: a handler that only notes it,
+    # checked each frame. A KeyboardInterrupt could land inside pygame's C code and be
+    # swallowed, leaving the editor open with no window to close (a test's Ctrl-C, once in a
+    # few hundred); simmer run stops on a signal the same way (serve._stop_on_signals).
+    interrupted: list[int] = []
+    previous = None
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not ignored
+        previous = signal.signal(signal.SIGINT, lambda number, _: interrupted.append(number))
     try:
-        saved = edit_maze(file, maze)
-    except KeyboardInterrupt:  # Ctrl-C in the terminal: as closing the window (S may have saved)
-        saved = file.exists() and file.stat().st_mtime_ns != before
+        out.print(
+            f"editing {file}{' (a new file: mie444 to start from)' if new else ''} in a window: "
+            "S saves; Esc, closing the window or Ctrl-C here ends",
+            markup=False,
+        )
+        saved = edit_maze(file, maze, lambda: bool(interrupted))
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
     out.print(f"saved {file}" if saved else f"{file} not saved", markup=False)

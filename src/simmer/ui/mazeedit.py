@@ -13,6 +13,7 @@ what ``read_text`` accepts.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -282,9 +283,9 @@ def window_size(maze: MazeSpec) -> tuple[int, int]:
     return (max(640, round(px * maze.cols) + 20), round(px * maze.rows) + 20 + STATUS_HEIGHT)
 
 
-def edit_maze(path: Path, maze: MazeSpec) -> bool:
-    """Open the editor's window on ``maze`` (saved to ``path``) until it is closed; whether it
-    was saved."""
+def edit_maze(path: Path, maze: MazeSpec, stop: Callable[[], bool] = lambda: False) -> bool:
+    """Open the editor's window on ``maze`` (saved to ``path``) until it is closed or ``stop()``
+    (checked each frame) says so; whether it was saved."""
     pygame.display.init()
     pygame.font.init()
     try:
@@ -292,7 +293,7 @@ def edit_maze(path: Path, maze: MazeSpec) -> bool:
         screen = pygame.display.set_mode(window_size(maze))
         editor = MazeEditor(path, maze, screen)
         clock = pygame.time.Clock()
-        while editor.frame():
+        while editor.frame() and not stop():
             pygame.display.flip()
             clock.tick(30)
         return editor.saved
