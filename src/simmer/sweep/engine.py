@@ -117,6 +117,7 @@ def local_pool(workers: int | None = None) -> Engine:
         context.set_forkserver_preload(["simmer.sweep.preload"])
     else:
         context = multiprocessing.get_context("spawn")
+    _start_helpers(context)
     stopping = context.RawValue(ctypes.c_bool, False)  # shared memory: set without a lock
 
     def make() -> _LocalPool:
@@ -131,6 +132,28 @@ def local_pool(workers: int | None = None) -> Engine:
         )
 
     return make
+
+
+def _start_helpers(context: multiprocessing.context.BaseContext) -> None:
+    """Start multiprocessing's own processes for the pool (its resource tracker; on Linux the
+    fork server its workers come from) ignoring SIGHUP, which they keep. They are in the
+    sweep's process group, which a closed terminal signals, and neither stops on SIGHUP by
+    itself: killed by it, the tracker was started again as the sweep stopped, with a warning
+    ("Some resources might leak") and four tracebacks. The workers, forked from the server,
+    ignore it too until a run takes it (:func:`simmer.serve.serve`); the sweep itself stops
+    them. Off the main thread, where a handler cannot be set, they start when first needed."""
+    from multiprocessing import forkserver, resource_tracker
+
+    hangup = getattr(signal, "SIGHUP", None)
+    if hangup is None or threading.current_thread() is not threading.main_thread():
+        return  # Windows: no SIGHUP, no tracker, no server
+    previous = signal.signal(hangup, signal.SIG_IGN)
+    try:
+        resource_tracker.ensure_running()
+        if context.get_start_method() == "forkserver":
+            forkserver.ensure_running()
+    finally:
+        signal.signal(hangup, previous)
 
 
 class _LocalPool(ProcessPoolExecutor):
