@@ -11,11 +11,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from simmer.protocol import (
+    CACHED_LONG_MESSAGES,
+    CACHED_MESSAGE_CHARS,
+    MAX_COMMANDS,
     MAX_MESSAGE_BYTES,
     decode_message,
     frame_replies,
     pack_replies,
     parse_command,
+    parse_commands,
     parse_message,
     printable,
     read_frame_header,
@@ -39,6 +43,26 @@ def test_good_commands(text: str, device: str, value: float) -> None:
 )
 def test_bad_commands_carry_a_reason(text: str) -> None:
     assert parse_command(text).error
+
+
+def test_long_messages_are_remembered_a_few_at_a_time_and_never_over_the_limits() -> None:
+    """A LiDAR's whole-scan read (some 3 KB, sent again and again) is parsed once while it is
+    among the last CACHED_LONG_MESSAGES long messages; a message over MAX_COMMANDS commands is
+    parsed each time (no cache holds a message a transport refuses)."""
+    scan = ",".join(["l0--2", *(f"l0-{a:.1f}" for a in range(360))])
+    assert len(scan) > CACHED_MESSAGE_CHARS
+    first = parse_commands(scan)
+    assert parse_commands(scan) is first
+    assert [c.value for c in first[:3]] == [-2.0, 0.0, 1.0]
+    for other in range(CACHED_LONG_MESSAGES):  # pushes the scan out
+        parse_commands(f"{scan},u{other}")
+    again = parse_commands(scan)
+    assert again == first
+    assert again is not first
+    flood = ",".join(["u0"] * (MAX_COMMANDS + 1))
+    one, two = parse_commands(flood), parse_commands(flood)
+    assert len(one) == MAX_COMMANDS + 1
+    assert one is not two
 
 
 def test_message_splits_on_commas_and_empty_message_is_one_bad_command() -> None:

@@ -406,7 +406,8 @@ class Client:
     def __init__(self, link: Link, *, lockstep: bool = False) -> None:
         self.link = link
         self._clock = link if lockstep and isinstance(link, ClockLink) else None
-        self._beams: dict[str, int] = {}
+        self._scans: dict[str, tuple[Any, str]] = {}
+        """Each LiDAR read so far: its beams' angles (a NumPy array) and its whole-scan message."""
         self.cut = 0
         """Points :meth:`show` cut to fit the bounds, in all."""
         self._cut_logged = -math.inf
@@ -441,16 +442,18 @@ class Client:
         one: ``l0--2`` and a read per beam, all answered from one scan (docs/protocol.md)."""
         import numpy as np
 
-        beams = self._beams.get(lidar_id)
-        if beams is None:
+        known = self._scans.get(lidar_id)
+        if known is None:
             value = self.read(f"{lidar_id}--1")
             if not (math.isfinite(value) and value >= 1 and value == int(value)):
                 raise ValueError(f"{lidar_id!r} answered {value!r} for its beams: not a LiDAR")
-            beams = self._beams[lidar_id] = int(value)
-        angles = np.arange(beams, dtype=np.float64) * (360.0 / beams)
-        message = ",".join([f"{lidar_id}--2", *(f"{lidar_id}-{a!r}" for a in angles.tolist())])
+            beams = int(value)
+            angles = np.arange(beams, dtype=np.float64) * (360.0 / beams)
+            reads = (f"{lidar_id}-{a!r}" for a in angles.tolist())
+            known = self._scans[lidar_id] = (angles, ",".join([f"{lidar_id}--2", *reads]))
+        angles, message = known
         values = self.send(message)
-        return Scan(angles, np.asarray(values[1:], dtype=np.float64), values[0])
+        return Scan(angles.copy(), np.asarray(values[1:], dtype=np.float64), values[0])
 
     def sleep(self, seconds: float) -> None:
         """Let ``seconds`` pass: simulated seconds in lockstep, else wall-clock ones."""

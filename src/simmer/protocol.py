@@ -154,14 +154,21 @@ def parse_message(text: str, *, lenient: bool = False) -> list[Command]:
 
 CACHED_MESSAGE_CHARS = 256
 """Messages up to this long are parsed once and remembered (:func:`parse_commands`)."""
+CACHED_LONG_MESSAGES = 8
+"""Longer messages within the message limits remembered (:func:`parse_commands`): at most
+this many, about 0.3 MB each at the limits (``MAX_MESSAGE_BYTES``, ``MAX_COMMANDS``)."""
 
 
 def parse_commands(text: str, *, lenient: bool = False) -> tuple[Command, ...]:
-    """:func:`parse_message` as a tuple, remembered for the last 1,024 short messages: a
-    program sends the same few messages (``u0,u1,u2,u3``) thousands of times, and a
-    :class:`Command` is immutable, so the loop need not parse (or build) them again."""
+    """:func:`parse_message` as a tuple, remembered for the last 1,024 short messages and the
+    last :data:`CACHED_LONG_MESSAGES` long ones: a program sends the same few messages
+    (``u0,u1,u2,u3``; a LiDAR's whole-scan read, some 3 KB) thousands of times, and a
+    :class:`Command` is immutable, so the loop need not parse (or build) them again. A
+    message over a limit (:func:`over_limit`) is parsed each time, never kept."""
     if len(text) <= CACHED_MESSAGE_CHARS:
         return _parse_cached(text, lenient)
+    if len(text) <= MAX_MESSAGE_BYTES and text.count(",") < MAX_COMMANDS:
+        return _parse_long_cached(text, lenient)
     return _parse_uncached(text, lenient)
 
 
@@ -170,6 +177,7 @@ def _parse_uncached(text: str, lenient: bool) -> tuple[Command, ...]:
 
 
 _parse_cached = functools.lru_cache(maxsize=1024)(_parse_uncached)
+_parse_long_cached = functools.lru_cache(maxsize=CACHED_LONG_MESSAGES)(_parse_uncached)
 
 
 def command_ids(text: str) -> list[str]:

@@ -237,9 +237,10 @@ class Runner:
                         client,
                         dropped,
                     )
-                answers = self.sim.answer(commands or self.sim.parse(text), text, request.client)
-                replies = [answer.value for answer in answers]
-                if records := [(a.level, a.why) for a in answers if a.why is not None]:
+                replies, failed = self.sim.replies(
+                    commands or self.sim.parse(text), text, request.client
+                )
+                if records := [(a.level, a.why) for a in failed if a.why is not None]:
                     self._report(printable(request.client), records, request.reasons)
             case Refused(error=error, count=count, size=size, over_limit=over):
                 self.over_limit += over

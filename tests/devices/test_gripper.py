@@ -56,7 +56,8 @@ def test_jaws_closed_on_nothing_grip_nothing_until_opened() -> None:
 
 def test_bad_gripper_values_answer_nan() -> None:
     sim = block_at(6.0, 39.0)
-    (answer,) = sim.answer(sim.parse("g0-2"), "g0-2")
+    values, (answer,) = sim.replies(sim.parse("g0-2"), "g0-2")
+    assert math.isnan(values[0])
     assert math.isnan(answer.value)
     assert answer.why is not None
     assert "1 closes, 0 opens" in answer.why

@@ -308,6 +308,26 @@ def test_reads_a_beam_by_angle_the_beams_and_the_scan_number() -> None:
         assert math.isnan(sim.command(bad)[0])
 
 
+def test_a_whole_scan_read_answers_each_scan_as_it_is_while_the_robot_drives() -> None:
+    """The client's whole-scan message (``l0--2`` and every beam's nominal angle, read from a
+    list made at a scan's first read) answers the latest scan each time, never the one before,
+    and off-grid angles (``-0``, ``0.4``) the nearest beam's distance."""
+    sim = make_sim(lidar_data(beams=180))
+    device = lidar(sim)
+    angles = np.arange(180) * 2.0
+    message = ",".join(["l0--2", *(f"l0-{a!r}" for a in angles.tolist())])
+    sim.command("w0-24")
+    previous: list[float] = []
+    for number in range(1, 7):
+        values = sim.command(message)
+        assert values[0] == number
+        assert values[1:] == device.distances.tolist()
+        assert values[1:] != previous  # the robot moved: a new scan
+        assert sim.command("l0--0,l0-0.4,l0-3.1") == [values[1], values[1], values[3]]
+        previous = values[1:]
+        next_scan(sim, device)
+
+
 def test_max_range_must_be_above_min_range() -> None:
     from simmer.errors import ConfigError
 

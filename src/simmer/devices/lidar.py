@@ -232,6 +232,11 @@ class Lidar(Device):
         self.mount = np.array([self.position.x, self.position.y, self.rotation])
         self.distances: FloatArray = np.zeros(n)
         """The latest scan's readings, inches (0: no return)."""
+        self._readings: list[float] | None = None
+        """The latest scan's distances as a list, made at its first read: a whole-scan read
+        indexes it 360 times, which a list does three times as fast as an array."""
+        self._beam_of = {float(angle): k for k, angle in enumerate(self.directions)}
+        """Each beam's index by its nominal angle, which a whole-scan read names exactly."""
         self.points: FloatArray = np.full((n, 2), math.nan)
         """Where each beam of the latest scan met something, world inches (NaN: no return)."""
         self.number = 0
@@ -377,6 +382,7 @@ class Lidar(Device):
             self.distances,
             self.points,
         )
+        self._readings = None
         self.number += 1
         self.scan_time = end
         self._due = end + self.period - 1e-9
@@ -399,17 +405,23 @@ class Lidar(Device):
         """A beam's distance of the latest scan (``value``: its angle, 0 to 360 degrees), or
         -1: the beams per revolution, -2: the scan's number."""
         self._record(world)
-        if value == BEAMS_READ:
-            return float(self.settings.beams)
-        if value == SCAN_NUMBER_READ:
-            return float(self.number)
-        if not 0.0 <= value < 360.0:
-            raise CommandError(
-                f"a LiDAR reads the beam at an angle from 0 to 360 degrees, or -1 (the beams "
-                f"per revolution) or -2 (the scan's number); {value:g} is none of them"
-            )
-        n = self.settings.beams
-        return float(self.distances[round(value * n / 360.0) % n])
+        beam = self._beam_of.get(value)
+        if beam is None:
+            if value == BEAMS_READ:
+                return float(self.settings.beams)
+            if value == SCAN_NUMBER_READ:
+                return float(self.number)
+            if not 0.0 <= value < 360.0:
+                raise CommandError(
+                    f"a LiDAR reads the beam at an angle from 0 to 360 degrees, or -1 (the beams "
+                    f"per revolution) or -2 (the scan's number); {value:g} is none of them"
+                )
+            n = self.settings.beams
+            beam = round(value * n / 360.0) % n
+        readings = self._readings
+        if readings is None:
+            readings = self._readings = self.distances.tolist()
+        return readings[beam]
 
     def shapes(self, world: World) -> list[Shape]:
         """The latest scan's points, while recent enough to show."""

@@ -230,8 +230,27 @@ class Simulation:
         A drive answers +inf when accepted and NaN when a drive is busy; a malformed command or
         an unknown device answers NaN and logs why. ``client`` names the sender in the event
         stream. (A transport parses a message once, as it decodes it, and calls
-        :meth:`answer`, which returns why with each value.)"""
-        commands = parse_commands(message, lenient=self._lenient)
+        :meth:`replies`, which returns why with each NaN.)"""
+        values, failed = self.replies(
+            parse_commands(message, lenient=self._lenient), message, client
+        )
+        for answer in failed:
+            if answer.why is not None:
+                log.log(answer.level, "%s", answer.why)
+        return values
+
+    def parse(self, message: str) -> tuple[Command, ...]:
+        """The commands of a message, read as this configuration says (strictly, or the
+        original SimMeR's lenient way)."""
+        return parse_commands(message, lenient=self._lenient)
+
+    def replies(
+        self, commands: Sequence[Command], message: str, client: str = ""
+    ) -> tuple[list[float], list[Answer]]:
+        """Execute the parsed ``commands`` of ``message``: one value per command, in order, and
+        the NaN answers among them with why (the caller logs as much of that as it wants and
+        tells the client). No object is built for a command that succeeds: a LiDAR's
+        whole-scan read is 361 commands."""
         self._before(commands)
         values: list[float] = []
         failed: list[Answer] = []
@@ -245,25 +264,7 @@ class Simulation:
                 values.append(reply.value)
         if self.observers:
             self.emit(CommandEvent(self._time, message, tuple(values), self.steps, client))
-        for answer in failed:
-            if answer.why is not None:
-                log.log(answer.level, "%s", answer.why)
-        return values
-
-    def parse(self, message: str) -> tuple[Command, ...]:
-        """The commands of a message, read as this configuration says (strictly, or the
-        original SimMeR's lenient way)."""
-        return parse_commands(message, lenient=self._lenient)
-
-    def answer(self, commands: Sequence[Command], message: str, client: str = "") -> list[Answer]:
-        """Execute the parsed ``commands`` of ``message``: each one's value and, for a NaN,
-        why (the caller logs as much of that as it wants and tells the client)."""
-        self._before(commands)
-        answers = [self.execute(command) for command in commands]
-        if self.observers:
-            replies = tuple(answer.value for answer in answers)
-            self.emit(CommandEvent(self._time, message, replies, self.steps, client))
-        return answers
+        return values, failed
 
     def _before(self, commands: Sequence[Command]) -> None:
         """What comes before a message's commands run: the thread check, lenient warnings."""
@@ -287,11 +288,6 @@ class Simulation:
                 command.value,
                 LENIENT_RULES[rule],
             )
-
-    def execute(self, command: Command) -> Answer:
-        """Execute one parsed command: its reply value and, for a NaN, why."""
-        reply = self._reply(command)
-        return reply if isinstance(reply, Answer) else Answer(reply)
 
     def _reply(self, command: Command) -> float | Answer:
         """Execute one parsed command: its value if it succeeded (no object built, as the
