@@ -83,25 +83,37 @@ def scan_runs() -> dict[str, Callable[[], object]]:
     return runs
 
 
+WHOLE_SCAN = ",".join(["l0--2", *(f"l0-{float(a)!r}" for a in range(360))])
+"""The message ``robot.scan("l0")`` sends for the default LiDAR's 360 beams."""
+
+
 def step_runs(count: int) -> dict[str, Callable[[], object]]:
     """``count`` steps of the rover driving back and forth: without a LiDAR, with the default
-    one (5.5 Hz, the A1M8's noise), with one noise off, and with one that never scans (what a
-    step costs the LiDAR when no scan is due)."""
+    one (5.5 Hz, the A1M8's noise), with one noise off, with one that never scans (what a
+    step costs the LiDAR when no scan is due), and with the default one read whole once a
+    revolution, as ``robot.scan("l0")`` does (the message's answering, not its transport)."""
     variants: dict[str, dict[str, Any] | None] = {
         "without": None,
         "with": {},
         "quiet": QUIET,
         "no_scan": NEVER,
+        "read": {},
     }
     runs: dict[str, Callable[[], object]] = {}
     for name, settings in variants.items():
         sim = rover(settings is not None, settings)
+        device = sim.robot.devices.get("l0")
+        reading = name == "read" and isinstance(device, Lidar)
 
-        def run(sim: Simulation = sim) -> None:
+        def run(sim: Simulation = sim, reading: bool = reading, device: Any = device) -> None:
+            read = device.number if reading else 0
             for _ in range(count):
                 if not sim.robot.any_drive_moving:
                     sim.command("w0-12" if sim.steps % 2 else "w0--12")
                 sim.step()
+                if reading and device.number != read:
+                    read = device.number
+                    sim.command(WHOLE_SCAN)
 
         runs[name] = run
     return runs
@@ -138,10 +150,11 @@ def main() -> dict[str, float]:
     steps = in_turns(step_runs(count), 1)
     per_step = {name: value / count * 1e6 for name, value in steps.items()}
     base = per_step["without"]
-    for name in ("with", "quiet", "no_scan"):
+    for name in ("with", "quiet", "no_scan", "read"):
         figures[f"step_{name}_us"] = per_step[name] - base
     figures["steps_ratio"] = base / per_step["with"]
     figures["steps_ratio_quiet"] = base / per_step["quiet"]
+    figures["steps_ratio_read"] = base / per_step["read"]
     print(
         f"steps per CPU second, the rovers in turn: {1e6 / per_step['with']:,.0f} with a LiDAR "
         f"at 5.5 Hz, {1e6 / base:,.0f} without: ratio {figures['steps_ratio']:.3f} "
@@ -152,6 +165,11 @@ def main() -> dict[str, float]:
         f"{figures['step_quiet_us']:.2f} us, ratio {figures['steps_ratio_quiet']:.3f}; a step "
         f"with no scan due: {figures['step_no_scan_us']:.2f} us) against {base:.1f} us a step "
         "without it"
+    )
+    print(
+        f"  with a program reading each scan whole (robot.scan's message answered once a "
+        f"revolution): {figures['step_read_us']:.2f} us a step, ratio "
+        f"{figures['steps_ratio_read']:.3f}"
     )
     figures["table_s"] = table_seconds()
     print(f"lab maze LiDAR table at 1 in: {figures['table_s']:.2f} s (target < 2)")
