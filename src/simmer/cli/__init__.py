@@ -27,5 +27,13 @@ __all__ = ["app", "main"]
 def main() -> None:
     """Entry point of the ``simmer`` console script."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(_ours_or_a_warning)
     AS_COMMAND.append(True)
     app()
+
+
+def _ours_or_a_warning(record: logging.LogRecord) -> bool:
+    """What the terminal shows: SimMeR's own lines, and a library's warnings and errors only
+    (Dask set its own loggers to INFO: a sweep on a local cluster printed 34 lines of it)."""
+    return record.levelno >= logging.WARNING or record.name.split(".")[0] == "simmer"

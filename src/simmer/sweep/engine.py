@@ -117,7 +117,7 @@ def local_pool(workers: int | None = None) -> Engine:
         context.set_forkserver_preload(["simmer.sweep.preload"])
     else:
         context = multiprocessing.get_context("spawn")
-    _start_helpers(context)
+    _start_helpers(fork_server=context.get_start_method() == "forkserver")
     stopping = context.RawValue(ctypes.c_bool, False)  # shared memory: set without a lock
 
     def make() -> _LocalPool:
@@ -134,14 +134,15 @@ def local_pool(workers: int | None = None) -> Engine:
     return make
 
 
-def _start_helpers(context: multiprocessing.context.BaseContext) -> None:
-    """Start multiprocessing's own processes for the pool (its resource tracker; on Linux the
-    fork server its workers come from) ignoring SIGHUP, which they keep. They are in the
-    sweep's process group, which a closed terminal signals, and neither stops on SIGHUP by
-    itself: killed by it, the tracker was started again as the sweep stopped, with a warning
-    ("Some resources might leak") and four tracebacks. The workers, forked from the server,
-    ignore it too until a run takes it (:func:`simmer.serve.serve`); the sweep itself stops
-    them. Off the main thread, where a handler cannot be set, they start when first needed."""
+def _start_helpers(*, fork_server: bool) -> None:
+    """Start multiprocessing's resource tracker (and, with ``fork_server``, the fork server a
+    local pool's workers come from) ignoring SIGHUP, which they keep. They are in the sweep's
+    process group, which a closed terminal signals, and neither stops on SIGHUP by itself:
+    killed by it, the tracker was started again as the sweep stopped, with a warning ("Some
+    resources might leak") and a traceback for each semaphore it then failed to find. Workers
+    forked from the server ignore it too until a run takes it (:func:`simmer.serve.serve`);
+    the sweep stops them itself. Off the main thread, where a handler cannot be set, they
+    start when first needed."""
     from multiprocessing import forkserver, resource_tracker
 
     hangup = getattr(signal, "SIGHUP", None)
@@ -150,7 +151,7 @@ def _start_helpers(context: multiprocessing.context.BaseContext) -> None:
     previous = signal.signal(hangup, signal.SIG_IGN)
     try:
         resource_tracker.ensure_running()
-        if context.get_start_method() == "forkserver":
+        if fork_server:
             forkserver.ensure_running()
     finally:
         signal.signal(hangup, previous)
@@ -297,6 +298,7 @@ def dask_engine(address: str | None = None, workers: int | None = None) -> Engin
     def make() -> Executor:
         if address is not None:
             return DaskExecutor(distributed.Client(address))
+        _start_helpers(fork_server=False)  # the cluster's processes start through multiprocessing
         cluster = distributed.LocalCluster(
             n_workers=count,
             threads_per_worker=1,
