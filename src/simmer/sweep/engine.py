@@ -143,11 +143,11 @@ def _start_helpers(*, fork_server: bool) -> None:
     forked from the server ignore it too until a run takes it (:func:`simmer.serve.serve`);
     the sweep stops them itself. Off the main thread, where a handler cannot be set, they
     start when first needed."""
-    from multiprocessing import forkserver, resource_tracker
-
     hangup = getattr(signal, "SIGHUP", None)
     if hangup is None or threading.current_thread() is not threading.main_thread():
         return  # Windows: no SIGHUP, no tracker, no server
+    from multiprocessing import forkserver, resource_tracker
+
     previous = signal.signal(hangup, signal.SIG_IGN)
     try:
         resource_tracker.ensure_running()
