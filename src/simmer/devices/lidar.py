@@ -404,9 +404,7 @@ class Lidar(Device):
     def simulate(self, value: float, world: World) -> float:
         """A beam's distance of the latest scan (``value``: its angle, 0 to 360 degrees), or
         -1: the beams per revolution, -2: the scan's number."""
-        track = self._track
-        if not track or world.time > track[-4]:  # else this pose is kept already (a step's)
-            self._record(world)
+        self._record(world)
         beam = self._beam_of.get(value)
         if beam is None:
             if value == BEAMS_READ:
